@@ -1,0 +1,10 @@
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+int main(int argc, char** argv) {
+  CLI::App app{"Facets: multi-image least-squares surface reconstruction"};
+  app.require_subcommand(1);
+  app.add_subcommand("version", "print the version")->callback([] { std::cout << "facets 0.1\n"; });
+  CLI11_PARSE(app, argc, argv);
+  return 0;
+}

@@ -1,0 +1,132 @@
+#include "visibility/embree_scene.h"
+
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace facets {
+namespace {
+
+thread_local std::string last_embree_error;
+
+void ErrorCallback(void*, RTCError code, const char* message) {
+  last_embree_error = "Embree error " + std::to_string(static_cast<int>(code)) + ": " +
+                      (message ? message : "");
+  std::fprintf(stderr, "%s\n", last_embree_error.c_str());
+}
+
+}  // namespace
+
+EmbreeDevice::EmbreeDevice() {
+  device_ = rtcNewDevice(nullptr);
+  if (!device_) {
+    throw std::runtime_error("Embree: cannot create a device (error " +
+                             std::to_string(static_cast<int>(rtcGetDeviceError(nullptr))) +
+                             ")");
+  }
+  rtcSetDeviceErrorFunction(device_, ErrorCallback, nullptr);
+}
+
+EmbreeDevice::~EmbreeDevice() { rtcReleaseDevice(device_); }
+
+void EmbreeDevice::Check() const {
+  const RTCError code = rtcGetDeviceError(device_);
+  if (code != RTC_ERROR_NONE) {
+    throw std::runtime_error(last_embree_error.empty()
+                                 ? "Embree error " + std::to_string(static_cast<int>(code))
+                                 : last_embree_error);
+  }
+}
+
+EmbreeDevice& EmbreeDevice::Shared() {
+  static EmbreeDevice device;
+  return device;
+}
+
+TriangleScene::TriangleScene(EmbreeDevice& device,
+                             const std::vector<Eigen::Vector3d>& vertices,
+                             const std::vector<Eigen::Vector3i>& triangles)
+    : device_(device), num_vertices_(vertices.size()), num_triangles_(triangles.size()) {
+  scene_ = rtcNewScene(device.get());
+  rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_MEDIUM);
+  geometry_ = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
+  // 4 floats per vertex: Embree may read 16 bytes past the last vertex otherwise.
+  vertex_buffer_ = static_cast<float*>(rtcSetNewGeometryBuffer(
+      geometry_, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 4 * sizeof(float),
+      num_vertices_));
+  auto* index_buffer = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+      geometry_, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+      num_triangles_));
+  device.Check();
+  for (size_t i = 0; i < num_triangles_; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const int index = triangles[i][k];
+      if (index < 0 || static_cast<size_t>(index) >= num_vertices_) {
+        throw std::invalid_argument("TriangleScene: triangle " + std::to_string(i) +
+                                    " has vertex index out of range");
+      }
+      index_buffer[3 * i + k] = static_cast<unsigned>(index);
+    }
+  }
+  UpdateVertices(vertices);
+  rtcAttachGeometry(scene_, geometry_);
+  rtcCommitScene(scene_);
+  device.Check();
+}
+
+TriangleScene::~TriangleScene() {
+  rtcReleaseGeometry(geometry_);
+  rtcReleaseScene(scene_);
+}
+
+void TriangleScene::UpdateVertices(const std::vector<Eigen::Vector3d>& vertices) {
+  if (vertices.size() != num_vertices_) {
+    throw std::invalid_argument("TriangleScene::UpdateVertices: vertex count changed");
+  }
+  for (size_t i = 0; i < num_vertices_; ++i) {
+    vertex_buffer_[4 * i + 0] = static_cast<float>(vertices[i].x());
+    vertex_buffer_[4 * i + 1] = static_cast<float>(vertices[i].y());
+    vertex_buffer_[4 * i + 2] = static_cast<float>(vertices[i].z());
+    vertex_buffer_[4 * i + 3] = 0.0f;
+  }
+  rtcUpdateGeometryBuffer(geometry_, RTC_BUFFER_TYPE_VERTEX, 0);
+  rtcCommitGeometry(geometry_);
+  // The scene needs a recommit after its geometry changed (harmless before attach).
+  rtcCommitScene(scene_);
+  device_.Check();
+}
+
+RayHit TriangleScene::Intersect(const Eigen::Vector3d& origin,
+                                const Eigen::Vector3d& direction, float t_near,
+                                float t_far) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit rayhit;
+  rayhit.ray.org_x = static_cast<float>(origin.x());
+  rayhit.ray.org_y = static_cast<float>(origin.y());
+  rayhit.ray.org_z = static_cast<float>(origin.z());
+  rayhit.ray.dir_x = static_cast<float>(direction.x());
+  rayhit.ray.dir_y = static_cast<float>(direction.y());
+  rayhit.ray.dir_z = static_cast<float>(direction.z());
+  rayhit.ray.tnear = t_near;
+  rayhit.ray.tfar = t_far;
+  rayhit.ray.mask = std::numeric_limits<unsigned>::max();
+  rayhit.ray.flags = 0;
+  rayhit.ray.time = 0;
+  rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(scene_, &context, &rayhit);
+  RayHit result;
+  if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return result;
+  result.hit = true;
+  result.prim_id = rayhit.hit.primID;
+  result.u = rayhit.hit.u;
+  result.v = rayhit.hit.v;
+  result.distance = rayhit.ray.tfar;
+  result.geom_normal = Eigen::Vector3f(rayhit.hit.Ng_x, rayhit.hit.Ng_y, rayhit.hit.Ng_z);
+  return result;
+}
+
+}  // namespace facets

@@ -1,0 +1,78 @@
+// RAII wrappers around Embree 3: one device per process (or per test), and a scene
+// holding one triangle mesh whose vertex buffer can be updated in place between
+// iterations (commit model: fill, commit once, query many times).
+//
+// Embree works in float: callers pass local object coordinates (double, already
+// relative to the block origin) and the scene stores them as float.
+#pragma once
+
+#include <embree3/rtcore.h>
+
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+namespace facets {
+
+// Owns an RTCDevice; errors reported by Embree are turned into std::runtime_error at
+// the next Check() and logged to stderr by the callback.
+class EmbreeDevice {
+ public:
+  EmbreeDevice();
+  ~EmbreeDevice();
+  EmbreeDevice(const EmbreeDevice&) = delete;
+  EmbreeDevice& operator=(const EmbreeDevice&) = delete;
+
+  RTCDevice get() const { return device_; }
+  // Throws if Embree reported an error since the last call.
+  void Check() const;
+
+  // A process-wide device, created on first use.
+  static EmbreeDevice& Shared();
+
+ private:
+  RTCDevice device_ = nullptr;
+};
+
+// First hit of one ray. prim_id is the triangle index in the scene's index buffer;
+// (u, v) are Embree's barycentrics: point = (1-u-v) V0 + u V1 + v V2.
+struct RayHit {
+  bool hit = false;
+  unsigned prim_id = 0;
+  float u = 0, v = 0;
+  float distance = 0;           // ray parameter t (the direction is not normalised)
+  Eigen::Vector3f geom_normal;  // unnormalised, (V1-V0) x (V2-V0)
+};
+
+// One triangle mesh in its own scene.
+class TriangleScene {
+ public:
+  // vertices: #V by 3 points; triangles: #F by 3 vertex indices.
+  TriangleScene(EmbreeDevice& device, const std::vector<Eigen::Vector3d>& vertices,
+                const std::vector<Eigen::Vector3i>& triangles);
+  ~TriangleScene();
+  TriangleScene(const TriangleScene&) = delete;
+  TriangleScene& operator=(const TriangleScene&) = delete;
+
+  // Moves the vertices (same count, same topology) and recommits: no rebuild of the
+  // geometry object, Embree refits or rebuilds its BVH as it sees fit.
+  void UpdateVertices(const std::vector<Eigen::Vector3d>& vertices);
+
+  size_t NumVertices() const { return num_vertices_; }
+  size_t NumTriangles() const { return num_triangles_; }
+  RTCScene get() const { return scene_; }
+
+  // Single ray, first hit only, within [t_near, t_far].
+  RayHit Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                   float t_near = 0.0f, float t_far = 1e30f) const;
+
+ private:
+  EmbreeDevice& device_;
+  RTCScene scene_ = nullptr;
+  RTCGeometry geometry_ = nullptr;
+  float* vertex_buffer_ = nullptr;  // owned by Embree, 3 floats + 1 pad per vertex
+  size_t num_vertices_ = 0;
+  size_t num_triangles_ = 0;
+};
+
+}  // namespace facets
