@@ -19,12 +19,22 @@
 
 namespace facets {
 
+// A 2D feature of an image as in COLMAP's images.txt (pixel convention of camera.h);
+// point3d_id is -1 when the feature was not triangulated.
+struct Keypoint {
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();
+  long long point3d_id = -1;
+};
+
 struct BlockImage {
   int image_id = 0;
   std::string name;  // as in the model (relative path)
   std::string path;  // resolved file path ("" until an image folder is known)
   int camera_id = 0;
   Rigid3d cam_from_world;
+  // COLMAP's 2D points of this image, kept so a model can be written back unchanged
+  // (tie point tracks index into them). Empty for project files.
+  std::vector<Keypoint> keypoints;
 
   // Projection centre X0 in local object coordinates.
   Eigen::Vector3d ProjectionCentre() const {

@@ -19,7 +19,12 @@
 #include <array>
 #include <vector>
 
+#include "mesh/g1_patch.h"
+#include "mesh/tin.h"
+
 namespace facets {
+
+struct CornerNormals;
 
 constexpr int kSubdivisions = 4;
 constexpr int kSubTrianglesPerFace = kSubdivisions * kSubdivisions;
@@ -49,5 +54,38 @@ inline Eigen::Vector3d FaceBarycentric(int k, double u, double v) {
   const auto& c = SubTriangleCorners(k);
   return (1.0 - u - v) * c[0] + u * c[1] + v * c[2];
 }
+
+// Inverse of FaceBarycentric: the sub-triangle k containing face barycentrics b (points
+// on shared sub-triangle edges go to one of them) and the Embree-style (u, v) there.
+struct SubTriangleLocation {
+  int k = 0;
+  double u = 0.0, v = 0.0;
+};
+SubTriangleLocation LocateSubTriangle(const Eigen::Vector3d& b);
+
+// Node index layout (stable for one mesh topology): vertex v -> v; the 3 nodes inside
+// edge e -> V + 3e + t, t = 0..2 counted from the edge's lower-index vertex; the 3
+// nodes inside face f -> V + 3E + 3f + t. The face vertex order is OpenMesh's
+// fv_range order (also the order of FacePatch), so triangles are counter-clockwise
+// seen from the side the face normal points to.
+// Points are evaluated on the G1 surface (TBB-parallel). The mesh must have no deleted
+// elements (call garbage_collection() after removals).
+Tessellation Tessellate(const TinMesh& mesh);
+// Same, with patches already built (BuildPatches(mesh)).
+Tessellation Tessellate(const TinMesh& mesh, const std::vector<G1Patch>& patches);
+// With crease edges (mesh/creases.h): the grey nodes on crease edges and crease
+// vertices are duplicated per side and sector, so object grey values may jump across a
+// crease (the two planes of a gable roof are lit differently). Layout: as above, then
+// 3 nodes for every crease edge (used by the face of the edge's halfedge 1), then one
+// node for every further sector of each crease vertex. Duplicates coincide in space,
+// so the tessellated surface stays watertight.
+Tessellation Tessellate(const TinMesh& mesh, const std::vector<G1Patch>& patches,
+                        const CornerNormals& creases);
+
+// After vertices (and normals) moved but the topology did not change: recomputes only
+// tess->points (node indices, triangles and the node-to-face map stay). Throws
+// std::invalid_argument when the mesh's face count does not match.
+void UpdateTessellationPoints(const TinMesh& mesh, Tessellation* tess);
+void UpdateTessellationPoints(const std::vector<G1Patch>& patches, Tessellation* tess);
 
 }  // namespace facets

@@ -46,10 +46,12 @@ EmbreeDevice& EmbreeDevice::Shared() {
 
 TriangleScene::TriangleScene(EmbreeDevice& device,
                              const std::vector<Eigen::Vector3d>& vertices,
-                             const std::vector<Eigen::Vector3i>& triangles)
+                             const std::vector<Eigen::Vector3i>& triangles,
+                             bool dynamic)
     : device_(device), num_vertices_(vertices.size()), num_triangles_(triangles.size()) {
   scene_ = rtcNewScene(device.get());
-  rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneFlags(scene_, dynamic ? RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC
+                                   : RTC_SCENE_FLAG_ROBUST);
   rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_MEDIUM);
   geometry_ = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
   // 4 floats per vertex: Embree may read 16 bytes past the last vertex otherwise.
@@ -81,7 +83,8 @@ TriangleScene::~TriangleScene() {
   rtcReleaseScene(scene_);
 }
 
-void TriangleScene::UpdateVertices(const std::vector<Eigen::Vector3d>& vertices) {
+void TriangleScene::UpdateVertices(const std::vector<Eigen::Vector3d>& vertices,
+                                   bool refit) {
   if (vertices.size() != num_vertices_) {
     throw std::invalid_argument("TriangleScene::UpdateVertices: vertex count changed");
   }
@@ -91,6 +94,8 @@ void TriangleScene::UpdateVertices(const std::vector<Eigen::Vector3d>& vertices)
     vertex_buffer_[4 * i + 2] = static_cast<float>(vertices[i].z());
     vertex_buffer_[4 * i + 3] = 0.0f;
   }
+  rtcSetGeometryBuildQuality(geometry_,
+                             refit ? RTC_BUILD_QUALITY_REFIT : RTC_BUILD_QUALITY_MEDIUM);
   rtcUpdateGeometryBuffer(geometry_, RTC_BUFFER_TYPE_VERTEX, 0);
   rtcCommitGeometry(geometry_);
   // The scene needs a recommit after its geometry changed (harmless before attach).

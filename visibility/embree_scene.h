@@ -47,16 +47,21 @@ struct RayHit {
 // One triangle mesh in its own scene.
 class TriangleScene {
  public:
-  // vertices: #V by 3 points; triangles: #F by 3 vertex indices.
+  // vertices: #V by 3 points; triangles: #F by 3 vertex indices. dynamic: the scene
+  // will be updated (RTC_SCENE_FLAG_DYNAMIC, Embree's two-level BVH), which is what
+  // lets UpdateVertices(..., refit = true) refit instead of rebuild.
   TriangleScene(EmbreeDevice& device, const std::vector<Eigen::Vector3d>& vertices,
-                const std::vector<Eigen::Vector3i>& triangles);
+                const std::vector<Eigen::Vector3i>& triangles, bool dynamic = false);
   ~TriangleScene();
   TriangleScene(const TriangleScene&) = delete;
   TriangleScene& operator=(const TriangleScene&) = delete;
 
   // Moves the vertices (same count, same topology) and recommits: no rebuild of the
-  // geometry object, Embree refits or rebuilds its BVH as it sees fit.
-  void UpdateVertices(const std::vector<Eigen::Vector3d>& vertices);
+  // geometry object. refit = false: Embree rebuilds its BVH (best tree for any
+  // motion); refit = true: it only refits the existing tree's boxes, much cheaper and
+  // as good while the motion is small against the triangle size (the iterations of
+  // one window); rebuild after large moves.
+  void UpdateVertices(const std::vector<Eigen::Vector3d>& vertices, bool refit = false);
 
   size_t NumVertices() const { return num_vertices_; }
   size_t NumTriangles() const { return num_triangles_; }

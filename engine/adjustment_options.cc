@@ -1,0 +1,61 @@
+#include "engine/adjustment_options.h"
+
+#include <stdexcept>
+
+namespace facets {
+
+Regularisation RegularisationFromName(const std::string& name) {
+  if (name == "curvature") return Regularisation::kCurvature;
+  if (name == "adaptive") return Regularisation::kAdaptive;
+  if (name == "none") return Regularisation::kNone;
+  throw std::invalid_argument("unknown regularisation '" + name +
+                              "' (known: curvature, adaptive, none)");
+}
+
+RadiometricModel RadiometricModelFromName(const std::string& name) {
+  if (name == "none") return RadiometricModel::kNone;
+  if (name == "constant") return RadiometricModel::kConstant;
+  if (name == "linear") return RadiometricModel::kLinear;
+  throw std::invalid_argument("unknown radiometric model '" + name +
+                              "' (known: none, constant, linear)");
+}
+
+std::string RegularisationName(Regularisation r) {
+  switch (r) {
+    case Regularisation::kCurvature: return "curvature";
+    case Regularisation::kAdaptive: return "adaptive";
+    case Regularisation::kNone: return "none";
+  }
+  return "?";
+}
+
+std::string RadiometricModelName(RadiometricModel m) {
+  switch (m) {
+    case RadiometricModel::kNone: return "none";
+    case RadiometricModel::kConstant: return "constant";
+    case RadiometricModel::kLinear: return "linear";
+  }
+  return "?";
+}
+
+void AdjustmentOptions::Check() const {
+  auto fail = [](const std::string& what) {
+    throw std::invalid_argument("adjustment options: " + what);
+  };
+  if (!(lambda >= 0.0)) fail("lambda must be >= 0");
+  if (reference_image < 0) fail("reference_image must be >= 0");
+  if (!(break_off > 0.0)) fail("break_off must be > 0");
+  if (max_iterations < 1) fail("max_iterations must be >= 1");
+  if (!(max_step >= 0.0)) fail("max_step must be >= 0");
+  if (!(min_cos_incidence >= 0.0 && min_cos_incidence < 1.0))
+    fail("min_cos_incidence must lie in [0, 1)");
+  if (!(crease_angle_deg > 0.0 && crease_angle_deg <= 180.0))
+    fail("crease_angle_deg must lie in (0, 180]");
+  if (!(grey_ridge >= 0.0)) fail("grey_ridge must be >= 0");
+  if (min_views < 0) fail("min_views must be >= 0");
+  if (!(max_sigma >= 0.0)) fail("max_sigma must be >= 0");
+  std::string error;
+  if (!pcg.Check(&error)) fail(error);
+}
+
+}  // namespace facets

@@ -1,0 +1,81 @@
+// Options of the least-squares adjustment of one window on one pyramid level
+// (DESIGN.md sections 4-6). The CLI and the pipeline fill this struct; the estimator
+// never parses flags.
+#pragma once
+
+#include <string>
+
+#include "engine/pcg.h"
+
+namespace facets {
+
+enum class Regularisation {
+  // Pseudo-observations "discrete curvature = 0" at every interior vertex.
+  kCurvature,
+  // Pseudo-observations "discrete curvature = c", with c re-estimated from the
+  // grey-value data after every iteration (block Gauss-Seidel between geometry and
+  // curvature vector, seed 003): edges and ridges that the images show survive.
+  kAdaptive,
+  kNone,
+};
+
+enum class RadiometricModel {
+  kNone,      // h0 = 0, h1 = 1 for every image
+  kConstant,  // h0 per image, h1 = 1
+  kLinear,    // h0 and h1 per image
+};
+
+Regularisation RegularisationFromName(const std::string& name);  // curvature|adaptive|none
+RadiometricModel RadiometricModelFromName(const std::string& name);  // none|constant|linear
+std::string RegularisationName(Regularisation r);
+std::string RadiometricModelName(RadiometricModel m);
+
+struct AdjustmentOptions {
+  Regularisation regularisation = Regularisation::kCurvature;
+  // Weight of one vertex's curvature pseudo-observation, in units of the pixel
+  // observations one vertex gets from one image at the design resolution (a grey
+  // facet covers 2x2 pixels, 16 facets per triangle, about 2 triangles per vertex:
+  // 128 pixels of weight 1, residuals in grey values). The pseudo-observation is the
+  // dimensionless discrete curvature  N_i . (mean of the 1-ring - X_i) / h_i  with
+  // h_i the mean length of the vertex's edges. Because every level keeps the facet
+  // at about 2x2 pixels, each vertex sees the same number of pixels on every level,
+  // and the grey-value change per unit displacement scales like 1/h just as the
+  // curvature does: lambda keeps its meaning across levels and facet sizes
+  // (docs/ENGINE.md). The seeds' 1000-6000 land in the same range.
+  double lambda = 1500.0;
+  RadiometricModel radiometry = RadiometricModel::kNone;
+  int reference_image = 0;  // index into the window's images; its h0 = 0, h1 = 1
+
+  // Break-off: the iteration stops when the largest displacement (object units)
+  // between two iterations falls below this bound for interior vertices, 2x for
+  // border and 4x for corner vertices.
+  double break_off = 0.01;
+  int max_iterations = 30;
+  // Largest displacement allowed in one iteration (object units); larger steps of
+  // the linearised solution are scaled down so the surface stays valid. 0 = off.
+  double max_step = 0.0;
+
+  // Edges whose two face normals differ by more than this are creases (ridges,
+  // eaves, wall edges): the surface stays continuous but not smooth across them
+  // (mesh/creases.h). 180 = a G1 surface everywhere.
+  double crease_angle_deg = 30.0;
+
+  // Rays at |cos incidence| below this are no observation.
+  double min_cos_incidence = 0.1;
+  // Tiny ridge on grey and radiometric unknowns (relative to the mean diagonal) so
+  // nodes no pixel sees keep their value instead of making N singular.
+  double grey_ridge = 1e-8;
+
+  PcgOptions pcg;
+  // Compute per-vertex standard deviations at the end (sparse factorisation).
+  bool compute_precision = true;
+  // A vertex is flagged undetermined when fewer images than this saw it, or its
+  // standard deviation exceeds max_sigma (object units; 0 = no sigma test).
+  int min_views = 2;
+  double max_sigma = 0.0;
+
+  // Throws std::invalid_argument naming the bad option.
+  void Check() const;
+};
+
+}  // namespace facets

@@ -1,0 +1,570 @@
+#include "engine/window_adjustment.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+
+#include "engine/observation.h"
+#include "mesh/creases.h"
+#include "visibility/image_selection.h"
+#include "visibility/surface_scene.h"
+
+namespace facets {
+namespace {
+
+constexpr int kNodesPerFace = 15;
+constexpr int kLocal = 3 + kNodesPerFace;  // face-local unknowns per channel
+
+double Seconds(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Face-local id of lattice node (i, j), i + j <= 4, counted row by row.
+int LocalNodeId(int i, int j) { return 5 * j - j * (j - 1) / 2 + i; }
+
+// For each local sub-triangle k, the face-local node ids of its three corners.
+const std::array<std::array<int, 3>, kSubTrianglesPerFace>& FacetLocalNodes() {
+  static const auto table = [] {
+    std::array<std::array<int, 3>, kSubTrianglesPerFace> t;
+    for (int k = 0; k < kSubTrianglesPerFace; ++k) {
+      const auto& corners = SubTriangleCorners(k);
+      for (int c = 0; c < 3; ++c) {
+        const int i = static_cast<int>(std::lround(corners[c][1] * kSubdivisions));
+        const int j = static_cast<int>(std::lround(corners[c][2] * kSubdivisions));
+        t[k][c] = LocalNodeId(i, j);
+      }
+    }
+    return t;
+  }();
+  return table;
+}
+
+// Thread-local share of the normal equations.
+struct Partial {
+  std::vector<double> values;
+  Eigen::VectorXd rhs;
+  double lpl = 0.0;
+  long long count = 0;
+};
+
+}  // namespace
+
+std::string WindowReport::BriefReport() const {
+  std::ostringstream out;
+  out << (converged ? "converged" : "NOT converged") << " after " << iterations.size()
+      << " iterations, sigma0 " << sigma0 << " grey values, " << observations
+      << " observations, " << unknowns << " unknowns, " << cg_iterations_total
+      << " CG iterations, " << seconds_total << " s";
+  return out.str();
+}
+
+WindowAdjustment::WindowAdjustment(TinMesh* mesh, std::vector<LevelImage> images,
+                                   AdjustmentOptions options)
+    : mesh_(mesh), images_(std::move(images)), options_(std::move(options)) {
+  options_.Check();
+  if (images_.empty()) throw std::invalid_argument("WindowAdjustment: no images");
+  channels_ = images_.front().pixels->channels;
+  for (const auto& image : images_) {
+    if (!image.camera || !image.pixels) throw std::invalid_argument("WindowAdjustment: null image");
+    if (image.pixels->channels != channels_) {
+      throw std::invalid_argument("WindowAdjustment: image " + std::to_string(image.image_id) +
+                                  " has " + std::to_string(image.pixels->channels) +
+                                  " channels, expected " + std::to_string(channels_));
+    }
+    if (image.pixels->width != image.camera->width || image.pixels->height != image.camera->height) {
+      throw std::invalid_argument("WindowAdjustment: image " + std::to_string(image.image_id) +
+                                  " size does not match its camera");
+    }
+  }
+  if (options_.reference_image >= static_cast<int>(images_.size())) {
+    throw std::invalid_argument("WindowAdjustment: reference_image out of range");
+  }
+  fixed_.assign(mesh_->n_vertices(), false);
+  radiometry_.assign(images_.size(), std::vector<std::array<double, 2>>(channels_, {0.0, 1.0}));
+  curvature_target_.assign(mesh_->n_vertices(), 0.0);
+}
+
+WindowAdjustment::~WindowAdjustment() = default;
+
+void WindowAdjustment::SetFixedVertices(std::vector<bool> fixed) {
+  if (fixed.size() != mesh_->n_vertices()) {
+    throw std::invalid_argument("SetFixedVertices: size differs from the vertex count");
+  }
+  fixed_ = std::move(fixed);
+}
+
+void WindowAdjustment::SetGreyValues(std::vector<double> grey) {
+  grey_ = std::move(grey);
+  grey_given_ = true;
+}
+
+void WindowAdjustment::BuildTopologyTables() {
+  const int num_faces = static_cast<int>(mesh_->n_faces());
+  face_vertices_.resize(num_faces);
+  face_nodes_.resize(num_faces);
+  const auto& local = FacetLocalNodes();
+  for (int f = 0; f < num_faces; ++f) {
+    int k = 0;
+    for (auto vh : mesh_->fv_range(mesh_->face_handle(f))) face_vertices_[f][k++] = vh.idx();
+    for (int s = 0; s < kSubTrianglesPerFace; ++s) {
+      const Eigen::Vector3i& tri = tess_.triangles[f * kSubTrianglesPerFace + s];
+      for (int c = 0; c < 3; ++c) face_nodes_[f][local[s][c]] = tri[c];
+    }
+  }
+  const int num_vertices = static_cast<int>(mesh_->n_vertices());
+  vertex_ring_.assign(num_vertices, {});
+  vertex_class_.assign(num_vertices, 0);
+  for (auto vh : mesh_->vertices()) {
+    if (mesh_->is_boundary(vh)) {
+      int faces = 0;
+      for (auto fh : mesh_->vf_range(vh)) {
+        (void)fh;
+        ++faces;
+      }
+      vertex_class_[vh.idx()] = faces <= 2 ? 2 : 1;
+    }
+    // Border vertices get the one-sided umbrella: on a plane it is still zero, and
+    // without it the half-observed border drifts from iteration to iteration.
+    for (auto nh : mesh_->vv_range(vh)) vertex_ring_[vh.idx()].push_back(nh.idx());
+  }
+}
+
+void WindowAdjustment::BuildPattern() {
+  const int num_vertices = static_cast<int>(mesh_->n_vertices());
+  vertex_unknown_.assign(num_vertices, -1);
+  num_geometry_ = 0;
+  for (int v = 0; v < num_vertices; ++v) {
+    if (!fixed_[v]) vertex_unknown_[v] = num_geometry_++;
+  }
+  grey_offset_ = num_geometry_;
+  const int num_nodes = static_cast<int>(tess_.points.size());
+  rad_offset_ = grey_offset_ + num_nodes * channels_;
+  num_rad_ = 0;
+  rad_unknown_.assign(images_.size(), std::vector<std::array<int, 2>>(channels_, {-1, -1}));
+  for (size_t k = 0; k < images_.size(); ++k) {
+    if (static_cast<int>(k) == options_.reference_image) continue;
+    for (int c = 0; c < channels_; ++c) {
+      if (options_.radiometry != RadiometricModel::kNone) rad_unknown_[k][c][0] = rad_offset_ + num_rad_++;
+      if (options_.radiometry == RadiometricModel::kLinear) rad_unknown_[k][c][1] = rad_offset_ + num_rad_++;
+    }
+  }
+  num_unknowns_ = rad_offset_ + num_rad_;
+
+  std::vector<std::vector<int>> cliques;
+  const int num_faces = static_cast<int>(face_vertices_.size());
+  cliques.reserve(static_cast<size_t>(num_faces) * channels_ + num_vertices);
+  for (int f = 0; f < num_faces; ++f) {
+    for (int c = 0; c < channels_; ++c) {
+      std::vector<int> clique;
+      for (int v : face_vertices_[f]) {
+        if (vertex_unknown_[v] >= 0) clique.push_back(vertex_unknown_[v]);
+      }
+      for (int node : face_nodes_[f]) clique.push_back(grey_offset_ + node * channels_ + c);
+      cliques.push_back(std::move(clique));
+    }
+  }
+  for (int v = 0; v < num_vertices; ++v) {
+    if (vertex_ring_[v].empty()) continue;
+    std::vector<int> clique;
+    if (vertex_unknown_[v] >= 0) clique.push_back(vertex_unknown_[v]);
+    for (int n : vertex_ring_[v]) {
+      if (vertex_unknown_[n] >= 0) clique.push_back(vertex_unknown_[n]);
+    }
+    if (!clique.empty()) cliques.push_back(std::move(clique));
+  }
+  if (num_rad_ > 0) {
+    // Radiometric unknowns couple with everything an image sees; giving every row all
+    // of them keeps them at the end of each row, at a computable slot.
+    std::vector<int> rad(num_rad_);
+    for (int r = 0; r < num_rad_; ++r) rad[r] = rad_offset_ + r;
+    for (int u = 0; u < rad_offset_; ++u) {
+      std::vector<int> clique = rad;
+      clique.push_back(u);
+      cliques.push_back(std::move(clique));
+    }
+    cliques.push_back(rad);
+  }
+  normal_ = CsrMatrix::FromCliques(num_unknowns_, cliques);
+
+  slots_.assign(static_cast<size_t>(num_faces) * channels_ * kLocal * kLocal, -1);
+  tbb::parallel_for(0, num_faces, [&](int f) {
+    for (int c = 0; c < channels_; ++c) {
+      std::array<int, kLocal> unknown;
+      for (int i = 0; i < 3; ++i) unknown[i] = vertex_unknown_[face_vertices_[f][i]];
+      for (int l = 0; l < kNodesPerFace; ++l) {
+        unknown[3 + l] = grey_offset_ + face_nodes_[f][l] * channels_ + c;
+      }
+      int64_t* table = &slots_[(static_cast<size_t>(f) * channels_ + c) * kLocal * kLocal];
+      for (int i = 0; i < kLocal; ++i) {
+        for (int j = 0; j < kLocal; ++j) {
+          if (unknown[i] >= 0 && unknown[j] >= 0) table[i * kLocal + j] = normal_.Find(unknown[i], unknown[j]);
+        }
+      }
+    }
+  });
+}
+
+long long WindowAdjustment::CastAll(std::vector<std::vector<PixelObservation>>* casts) {
+  Eigen::AlignedBox3d box;
+  for (const auto& p : tess_.points) box.extend(p);
+  CastOptions cast_options;
+  cast_options.min_cos_incidence = options_.min_cos_incidence;
+  casts->assign(images_.size(), {});
+  long long total = 0;
+  for (size_t k = 0; k < images_.size(); ++k) {
+    const auto rect = ProjectBox(box, *images_[k].camera, images_[k].cam_from_world);
+    if (!rect) continue;
+    (*casts)[k] = CastPixels(*scene_, *images_[k].camera, images_[k].cam_from_world, *rect,
+                             cast_options).observations;
+    total += static_cast<long long>((*casts)[k].size());
+  }
+  return total;
+}
+
+void WindowAdjustment::InitialiseGrey(const std::vector<std::vector<PixelObservation>>& casts) {
+  const size_t num_nodes = tess_.points.size();
+  std::vector<double> sum(num_nodes * channels_, 0.0), weight(num_nodes, 0.0);
+  double total = 0.0;
+  long long count = 0;
+  for (size_t k = 0; k < casts.size(); ++k) {
+    const ImagePlanes& pixels = *images_[k].pixels;
+    for (const PixelObservation& obs : casts[k]) {
+      const Eigen::Vector3i& tri = tess_.triangles[obs.facet];
+      const double w[3] = {1.0 - obs.u - obs.v, obs.u, obs.v};
+      for (int corner = 0; corner < 3; ++corner) {
+        weight[tri[corner]] += w[corner];
+        for (int c = 0; c < channels_; ++c) {
+          const double g = pixels.data[(static_cast<size_t>(c) * pixels.height + obs.y) * pixels.width + obs.x];
+          const auto& rad = radiometry_[k][c];
+          sum[tri[corner] * channels_ + c] += w[corner] * (g * rad[1] + rad[0]);
+        }
+      }
+      for (int c = 0; c < channels_; ++c) {
+        total += pixels.data[(static_cast<size_t>(c) * pixels.height + obs.y) * pixels.width + obs.x];
+      }
+      ++count;
+    }
+  }
+  const double mean = count > 0 ? total / (count * channels_) : 0.0;
+  grey_.assign(num_nodes * channels_, mean);
+  for (size_t n = 0; n < num_nodes; ++n) {
+    if (weight[n] <= 1e-9) continue;
+    for (int c = 0; c < channels_; ++c) grey_[n * channels_ + c] = sum[n * channels_ + c] / weight[n];
+  }
+}
+
+double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservation>>& casts,
+                                    Eigen::VectorXd* rhs, long long* count) {
+  const auto& row_ptr = normal_.row_ptr();
+  const int64_t nnz = normal_.nonZeros();
+  const auto& local_nodes = FacetLocalNodes();
+  tbb::enumerable_thread_specific<Partial> partials([&] {
+    Partial p;
+    p.values.assign(nnz, 0.0);
+    p.rhs = Eigen::VectorXd::Zero(num_unknowns_);
+    return p;
+  });
+  for (size_t k = 0; k < casts.size(); ++k) {
+    const auto& observations = casts[k];
+    if (observations.empty()) continue;
+    const PixelRays rays(*images_[k].camera, images_[k].cam_from_world);
+    const ImagePlanes& pixels = *images_[k].pixels;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, observations.size(), 4096),
+                      [&](const tbb::blocked_range<size_t>& range) {
+      Partial& p = partials.local();
+      PixelRay ray;
+      ray.origin = rays.origin();
+      FacetState facet;
+      for (size_t o = range.begin(); o != range.end(); ++o) {
+        const PixelObservation& obs = observations[o];
+        const int f = obs.face;
+        const int local_k = obs.facet % kSubTrianglesPerFace;
+        const Eigen::Vector3i& tri = tess_.triangles[obs.facet];
+        const auto& corners = SubTriangleCorners(local_k);
+        for (int j = 0; j < 3; ++j) {
+          facet.corners[j] = tess_.points[tri[j]];
+          facet.corner_face_barycentric[j] = corners[j];
+          facet.vertex_normals[j] = ToEigen(mesh_->normal(mesh_->vertex_handle(face_vertices_[f][j])));
+        }
+        ray.direction = rays.Direction(obs.x, obs.y);
+        std::array<int, 6> local;
+        for (int i = 0; i < 3; ++i) local[i] = i;
+        for (int i = 0; i < 3; ++i) local[3 + i] = 3 + local_nodes[local_k][i];
+        for (int c = 0; c < channels_; ++c) {
+          for (int j = 0; j < 3; ++j) facet.grey[j] = grey_[tri[j] * channels_ + c];
+          const auto& rad = radiometry_[k][c];
+          const ObservationCoefficients lin =
+              Linearise(ray, facet, obs.u, obs.v, Radiometry{rad[0], rad[1]});
+          if (!lin.valid) continue;
+          const double g = pixels.data[(static_cast<size_t>(c) * pixels.height + obs.y) * pixels.width + obs.x];
+          const double l = g - lin.predicted;
+          const double a[6] = {lin.dn[0], lin.dn[1], lin.dn[2], lin.grey[0], lin.grey[1], lin.grey[2]};
+          const int64_t* table = &slots_[(static_cast<size_t>(f) * channels_ + c) * kLocal * kLocal];
+          int unknown[6];
+          for (int i = 0; i < 3; ++i) unknown[i] = vertex_unknown_[face_vertices_[f][i]];
+          for (int i = 0; i < 3; ++i) unknown[3 + i] = grey_offset_ + tri[i] * channels_ + c;
+          for (int i = 0; i < 6; ++i) {
+            if (unknown[i] < 0) continue;
+            p.rhs[unknown[i]] += a[i] * l;
+            const int64_t* row = table + local[i] * kLocal;
+            for (int j = 0; j < 6; ++j) {
+              const int64_t slot = row[local[j]];
+              if (slot >= 0) p.values[slot] += a[i] * a[j];
+            }
+          }
+          const std::array<int, 2>& rad_unknown = rad_unknown_[k][c];
+          const double a_rad[2] = {lin.h0, lin.h1};
+          for (int r = 0; r < 2; ++r) {
+            const int ur = rad_unknown[r];
+            if (ur < 0) continue;
+            p.rhs[ur] += a_rad[r] * l;
+            const int64_t rad_col = ur - rad_offset_;
+            for (int i = 0; i < 6; ++i) {
+              if (unknown[i] < 0) continue;
+              const double product = a[i] * a_rad[r];
+              p.values[row_ptr[unknown[i] + 1] - num_rad_ + rad_col] += product;
+              p.values[row_ptr[ur] + unknown[i]] += product;
+            }
+            for (int s = 0; s < 2; ++s) {
+              if (rad_unknown[s] >= 0) p.values[row_ptr[ur] + rad_unknown[s]] += a_rad[r] * a_rad[s];
+            }
+          }
+          p.lpl += l * l;
+          ++p.count;
+        }
+      }
+    });
+  }
+  // Reduce the thread-local shares.
+  std::vector<double>& values = normal_.values();
+  std::fill(values.begin(), values.end(), 0.0);
+  *rhs = Eigen::VectorXd::Zero(num_unknowns_);
+  double lpl = 0.0;
+  *count = 0;
+  for (const Partial& p : partials) {
+    tbb::parallel_for(tbb::blocked_range<int64_t>(0, nnz, 1 << 16),
+                      [&](const tbb::blocked_range<int64_t>& range) {
+      for (int64_t i = range.begin(); i != range.end(); ++i) values[i] += p.values[i];
+    });
+    *rhs += p.rhs;
+    lpl += p.lpl;
+    *count += p.count;
+  }
+  return lpl;
+}
+
+std::vector<double> WindowAdjustment::CurrentCurvatures() const {
+  std::vector<double> curvature(mesh_->n_vertices(), 0.0);
+  for (size_t v = 0; v < vertex_ring_.size(); ++v) {
+    const auto& ring = vertex_ring_[v];
+    if (ring.empty()) continue;
+    const Eigen::Vector3d x = ToEigen(mesh_->point(mesh_->vertex_handle(static_cast<int>(v))));
+    const Eigen::Vector3d n = ToEigen(mesh_->normal(mesh_->vertex_handle(static_cast<int>(v))));
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    double h = 0.0;
+    for (int j : ring) {
+      const Eigen::Vector3d xj = ToEigen(mesh_->point(mesh_->vertex_handle(j)));
+      mean += xj;
+      h += (xj - x).norm();
+    }
+    mean /= ring.size();
+    h /= ring.size();
+    curvature[v] = n.dot(mean - x) / h;
+  }
+  return curvature;
+}
+
+double WindowAdjustment::AccumulateCurvature(Eigen::VectorXd* rhs, long long* count) {
+  if (options_.regularisation == Regularisation::kNone || options_.lambda == 0.0) return 0.0;
+  const std::vector<double> current = CurrentCurvatures();
+  // Pixel observations one vertex gets from one image at the design resolution:
+  // 2 triangles x 16 grey facets x 2x2 pixels (see AdjustmentOptions::lambda).
+  constexpr double kPixelsPerVertex = 2 * kSubTrianglesPerFace * 4;
+  const double weight = options_.lambda * kPixelsPerVertex;
+  double lpl = 0.0;
+  for (size_t v = 0; v < vertex_ring_.size(); ++v) {
+    const auto& ring = vertex_ring_[v];
+    if (ring.empty() || crease_vertex_[v]) continue;  // creases are meant to bend
+    const Eigen::Vector3d x = ToEigen(mesh_->point(mesh_->vertex_handle(static_cast<int>(v))));
+    const Eigen::Vector3d n = ToEigen(mesh_->normal(mesh_->vertex_handle(static_cast<int>(v))));
+    double h = 0.0;
+    for (int j : ring) h += (ToEigen(mesh_->point(mesh_->vertex_handle(j))) - x).norm();
+    h /= ring.size();
+    std::vector<std::pair<int, double>> terms;
+    if (vertex_unknown_[v] >= 0) terms.emplace_back(vertex_unknown_[v], -1.0 / h);
+    for (int j : ring) {
+      if (vertex_unknown_[j] < 0) continue;
+      const Eigen::Vector3d nj = ToEigen(mesh_->normal(mesh_->vertex_handle(j)));
+      terms.emplace_back(vertex_unknown_[j], n.dot(nj) / (ring.size() * h));
+    }
+    if (terms.empty()) continue;
+    const double target =
+        options_.regularisation == Regularisation::kAdaptive ? curvature_target_[v] : 0.0;
+    const double l = target - current[v];
+    for (const auto& [ui, ai] : terms) {
+      (*rhs)[ui] += weight * ai * l;
+      for (const auto& [uj, aj] : terms) normal_.Add(ui, uj, weight * ai * aj);
+    }
+    lpl += weight * l * l;
+    ++*count;
+  }
+  return lpl;
+}
+
+WindowReport WindowAdjustment::Run() {
+  const auto run_start = std::chrono::steady_clock::now();
+  WindowReport report;
+  // Creases are decided once per window run: the grey lattice (split along creases)
+  // must keep its node indices while the adjustment iterates.
+  crease_edges_ = DetectCreaseEdges(*mesh_, options_.crease_angle_deg);
+  {
+    const CornerNormals corners = ComputeCornerNormals(*mesh_, crease_edges_);
+    tess_ = Tessellate(*mesh_, BuildPatches(*mesh_, corners), corners);
+    report.crease_edges = corners.num_crease_edges;
+    crease_vertex_.assign(mesh_->n_vertices(), false);
+    for (auto vh : mesh_->vertices()) crease_vertex_[vh.idx()] = corners.vertex_sectors[vh.idx()] > 1;
+  }
+  scene_ = std::make_unique<SurfaceScene>(tess_);
+  BuildTopologyTables();
+  BuildPattern();
+
+  const int num_vertices = static_cast<int>(mesh_->n_vertices());
+  std::vector<std::vector<PixelObservation>> casts;
+  Eigen::VectorXd rhs, solution;
+  std::vector<uint8_t> face_seen;
+  const double bounds[3] = {options_.break_off, 2 * options_.break_off, 4 * options_.break_off};
+
+  for (int iteration = 1; iteration <= options_.max_iterations; ++iteration) {
+    IterationReport it;
+    it.iteration = iteration;
+    auto start = std::chrono::steady_clock::now();
+    it.observations = CastAll(&casts);
+    it.seconds_cast = Seconds(start);
+    if (it.observations == 0) {
+      throw std::runtime_error("WindowAdjustment: no image sees the window (0 observations)");
+    }
+    if (grey_.empty() || (iteration == 1 && !grey_given_)) InitialiseGrey(casts);
+
+    start = std::chrono::steady_clock::now();
+    long long count = 0, pseudo = 0;
+    double lpl = Accumulate(casts, &rhs, &count);
+    lpl += AccumulateCurvature(&rhs, &pseudo);
+    // Ridge: keeps unknowns without any observation (grey nodes nobody sees, vertices
+    // outside every view) at their value instead of making N singular.
+    double mean_diag = 0.0;
+    for (int i = 0; i < num_unknowns_; ++i) mean_diag += normal_.Diagonal(i);
+    mean_diag = std::max(mean_diag / std::max(num_unknowns_, 1), 1e-300);
+    int determined = 0;
+    for (int i = 0; i < num_unknowns_; ++i) {
+      const int64_t slot = normal_.diagonal_index()[i];
+      if (normal_.values()[slot] > options_.grey_ridge * mean_diag) ++determined;
+      normal_.values()[slot] += options_.grey_ridge * mean_diag;
+    }
+    it.seconds_linearise = Seconds(start);
+
+    start = std::chrono::steady_clock::now();
+    solution = Eigen::VectorXd::Zero(num_unknowns_);
+    const PcgSummary pcg = SolvePcg(normal_, rhs, options_.pcg, &solution);
+    it.cg_iterations = pcg.iterations;
+    it.seconds_solve = Seconds(start);
+
+    const long long redundancy = count + pseudo - determined;
+    const double vpv = std::max(lpl - solution.dot(rhs), 0.0);
+    it.sigma0 = redundancy > 0 ? std::sqrt(vpv / redundancy) : 0.0;
+    report.observations = count;
+    report.pseudo_observations = pseudo;
+    report.unknowns = determined;
+    report.redundancy = redundancy;
+
+    // Update: vertices along their (current) normals, then grey values, radiometry.
+    start = std::chrono::steady_clock::now();
+    double scale = 1.0;
+    if (options_.max_step > 0.0) {
+      double largest = 0.0;
+      for (int v = 0; v < num_vertices; ++v) {
+        if (vertex_unknown_[v] >= 0) largest = std::max(largest, std::abs(solution[vertex_unknown_[v]]));
+      }
+      if (largest > options_.max_step) scale = options_.max_step / largest;
+    }
+    double max_dn[3] = {0.0, 0.0, 0.0};
+    for (int v = 0; v < num_vertices; ++v) {
+      if (vertex_unknown_[v] < 0) continue;
+      const double dn = scale * solution[vertex_unknown_[v]];
+      auto vh = mesh_->vertex_handle(v);
+      mesh_->set_point(vh, mesh_->point(vh) + dn * mesh_->normal(vh));
+      max_dn[vertex_class_[v]] = std::max(max_dn[vertex_class_[v]], std::abs(dn));
+    }
+    for (size_t n = 0; n < grey_.size(); ++n) grey_[n] += solution[grey_offset_ + n];
+    for (size_t k = 0; k < images_.size(); ++k) {
+      for (int c = 0; c < channels_; ++c) {
+        if (rad_unknown_[k][c][0] >= 0) radiometry_[k][c][0] += solution[rad_unknown_[k][c][0]];
+        if (rad_unknown_[k][c][1] >= 0) radiometry_[k][c][1] += solution[rad_unknown_[k][c][1]];
+      }
+    }
+    UpdateVertexNormals(mesh_);
+    if (options_.regularisation == Regularisation::kAdaptive) curvature_target_ = CurrentCurvatures();
+    UpdateTessellationPoints(BuildPatches(*mesh_, ComputeCornerNormals(*mesh_, crease_edges_)), &tess_);
+    scene_->Update(tess_);
+    it.seconds_update = Seconds(start);
+    it.max_dn_interior = max_dn[0];
+    it.max_dn_border = max_dn[1];
+    it.max_dn_corner = max_dn[2];
+    report.cg_iterations_total += it.cg_iterations;
+    report.iterations.push_back(it);
+    report.sigma0 = it.sigma0;
+    if (scale == 1.0 && max_dn[0] < bounds[0] && max_dn[1] < bounds[1] && max_dn[2] < bounds[2]) {
+      report.converged = true;
+      break;
+    }
+  }
+
+  // Views per vertex: images with observations on any face around the vertex.
+  const int num_faces = static_cast<int>(face_vertices_.size());
+  face_seen.assign(static_cast<size_t>(num_faces) * images_.size(), 0);
+  for (size_t k = 0; k < casts.size(); ++k) {
+    for (const PixelObservation& obs : casts[k]) face_seen[static_cast<size_t>(obs.face) * images_.size() + k] = 1;
+  }
+  report.vertex_views.assign(num_vertices, 0);
+  for (auto vh : mesh_->vertices()) {
+    for (size_t k = 0; k < images_.size(); ++k) {
+      for (auto fh : mesh_->vf_range(vh)) {
+        if (face_seen[static_cast<size_t>(fh.idx()) * images_.size() + k]) {
+          ++report.vertex_views[vh.idx()];
+          break;
+        }
+      }
+    }
+  }
+
+  report.vertex_sigma.assign(num_vertices, 0.0);
+  report.vertex_flags.assign(num_vertices, kVertexOk);
+  if (options_.compute_precision && num_geometry_ > 0) {
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<int> geometry(num_geometry_);
+    for (int i = 0; i < num_geometry_; ++i) geometry[i] = i;
+    const Eigen::VectorXd q = InverseDiagonal(normal_, geometry);
+    for (int v = 0; v < num_vertices; ++v) {
+      if (vertex_unknown_[v] >= 0) report.vertex_sigma[v] = report.sigma0 * std::sqrt(std::max(q[vertex_unknown_[v]], 0.0));
+    }
+    report.seconds_precision = Seconds(start);
+  }
+  for (int v = 0; v < num_vertices; ++v) {
+    uint8_t flags = kVertexOk;
+    if (fixed_[v]) flags |= kVertexFixed;
+    if (report.vertex_views[v] < options_.min_views) flags |= kVertexFewViews;
+    if (options_.max_sigma > 0.0 && report.vertex_sigma[v] > options_.max_sigma) flags |= kVertexHighSigma;
+    report.vertex_flags[v] = flags;
+  }
+  report.radiometry = radiometry_;
+  report.seconds_total = Seconds(run_start);
+  return report;
+}
+
+}  // namespace facets

@@ -1,0 +1,146 @@
+// Least-squares adjustment of one window on one pyramid level: multi-image matching
+// in object space (DESIGN.md sections 4-6). Unknowns: normal displacements dn of the
+// TIN vertices, object grey values at the grey nodes (per channel), radiometric
+// transfer (h0, h1) per image and channel. Every visible pixel of every image is one
+// observation; curvature pseudo-observations regularise the geometry.
+//
+// One iteration: update the G1 tessellation and its Embree scene, cast every pixel ray
+// of every image (first hit only), linearise, assemble the normal equations straight
+// into CSR, solve by SSOR-PCG, move the vertices along their normals and update grey
+// values and radiometry; until the break-off criterion holds.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/adjustment_options.h"
+#include "engine/csr_matrix.h"
+#include "io/camera.h"
+#include "io/image_io.h"
+#include "io/rigid3d.h"
+#include "mesh/tessellation.h"
+#include "mesh/tin.h"
+#include "visibility/pixel_cast.h"
+
+namespace facets {
+
+// One image as the adjustment sees it on one level. The pointers are not owned and
+// must outlive the adjustment.
+struct LevelImage {
+  int image_id = 0;
+  const Camera* camera = nullptr;      // scaled to the level
+  Rigid3d cam_from_world;
+  const ImagePlanes* pixels = nullptr;  // same channel count for every image
+};
+
+enum VertexFlag : uint8_t {
+  kVertexOk = 0,
+  kVertexFewViews = 1,     // seen by fewer than AdjustmentOptions::min_views images
+  kVertexHighSigma = 2,    // standard deviation above AdjustmentOptions::max_sigma
+  kVertexFixed = 4,        // held fixed (window border), not estimated here
+};
+
+struct IterationReport {
+  int iteration = 0;
+  long long observations = 0;
+  int cg_iterations = 0;
+  double sigma0 = 0.0;           // of this linearisation, grey values
+  double max_dn_interior = 0.0;  // object units
+  double max_dn_border = 0.0;
+  double max_dn_corner = 0.0;
+  double seconds_cast = 0.0;
+  double seconds_linearise = 0.0;  // linearisation + accumulation into CSR
+  double seconds_solve = 0.0;
+  double seconds_update = 0.0;     // vertices, normals, tessellation, Embree scene
+};
+
+struct WindowReport {
+  std::vector<IterationReport> iterations;
+  bool converged = false;
+  double sigma0 = 0.0;  // grey values, of the last linearisation
+  long long observations = 0;
+  long long pseudo_observations = 0;
+  int unknowns = 0;
+  long long redundancy = 0;
+  int cg_iterations_total = 0;
+  int crease_edges = 0;
+  double seconds_total = 0.0;
+  double seconds_precision = 0.0;
+  // Per TIN vertex.
+  std::vector<double> vertex_sigma;  // standard deviation of dn, object units (0: fixed)
+  std::vector<int> vertex_views;     // images that saw the vertex's faces
+  std::vector<uint8_t> vertex_flags;
+  // Per image (index into the window's images) and channel: h0, h1.
+  std::vector<std::vector<std::array<double, 2>>> radiometry;
+
+  std::string BriefReport() const;
+};
+
+class WindowAdjustment {
+ public:
+  // The mesh is adjusted in place; its vertex normals must be set.
+  WindowAdjustment(TinMesh* mesh, std::vector<LevelImage> images, AdjustmentOptions options);
+  ~WindowAdjustment();
+
+  // Vertices held fixed (e.g. window borders taken from neighbours); size = vertices.
+  void SetFixedVertices(std::vector<bool> fixed);
+  // Grey values to start from (node-major: node * channels + c) instead of the mean
+  // of the pixels that see each node.
+  void SetGreyValues(std::vector<double> grey);
+
+  WindowReport Run();
+
+  const Tessellation& tessellation() const { return tess_; }
+  int channels() const { return channels_; }
+  // Object grey values per node: grey()[node * channels() + c].
+  const std::vector<double>& grey() const { return grey_; }
+
+ private:
+  void BuildTopologyTables();
+  void BuildPattern();
+  long long CastAll(std::vector<std::vector<PixelObservation>>* casts);
+  void InitialiseGrey(const std::vector<std::vector<PixelObservation>>& casts);
+  double Accumulate(const std::vector<std::vector<PixelObservation>>& casts,
+                    Eigen::VectorXd* rhs, long long* count);
+  double AccumulateCurvature(Eigen::VectorXd* rhs, long long* count);
+  std::vector<double> CurrentCurvatures() const;
+
+  TinMesh* mesh_;
+  std::vector<LevelImage> images_;
+  AdjustmentOptions options_;
+  int channels_ = 1;
+
+  Tessellation tess_;
+  std::unique_ptr<SurfaceScene> scene_;
+  std::vector<double> grey_;
+  bool grey_given_ = false;
+  std::vector<std::vector<std::array<double, 2>>> radiometry_;  // [image][channel]
+  std::vector<bool> fixed_;
+  std::vector<bool> crease_edges_;  // by edge, fixed for one Run
+  std::vector<bool> crease_vertex_;  // vertices where creases separate face sectors
+  std::vector<double> curvature_target_;  // adaptive regularisation, per vertex
+
+  // Topology tables (fixed for one adjustment).
+  std::vector<std::array<int, 3>> face_vertices_;
+  std::vector<std::array<int, 15>> face_nodes_;  // lattice node of face-local node l
+  std::vector<std::vector<int>> vertex_ring_;    // 1-ring (one-sided at the border)
+  std::vector<uint8_t> vertex_class_;            // 0 interior, 1 border, 2 corner
+
+  // Unknown layout: [vertex dn | node grey (node * C + c) | radiometry].
+  std::vector<int> vertex_unknown_;  // -1 when fixed
+  int num_geometry_ = 0;
+  int grey_offset_ = 0;
+  int rad_offset_ = 0;
+  int num_rad_ = 0;
+  std::vector<std::vector<std::array<int, 2>>> rad_unknown_;  // [image][channel] -> h0, h1 (-1)
+  int num_unknowns_ = 0;
+  CsrMatrix normal_;
+  // Per face and channel, CSR slots of the 18 face-local unknowns (3 vertices then 15
+  // nodes of that channel): slots_[(f * C + c) * 324 + 18 * i + j], -1 if fixed.
+  std::vector<int64_t> slots_;
+};
+
+}  // namespace facets

@@ -1,0 +1,39 @@
+// Images as float planes, read and written via OpenImageIO. The raw pixel layout of
+// the file is used: EXIF orientation is NOT applied (the data sets are normalised).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "io/camera.h"
+
+namespace facets {
+
+// An image as float planes in the file's own grey scale (0..255 for 8 bit, 0..65535 for
+// 16 bit, as stored for float files). Plane-major: data[(c * height + y) * width + x].
+struct ImagePlanes {
+  int width = 0, height = 0, channels = 0;
+  int bits = 8;   // bit depth of the source file (8, 16, 32 for float)
+  std::vector<float> data;
+  float& at(int c, int x, int y);
+  float at(int c, int x, int y) const;
+  // Mean over channels into one grey plane.
+  ImagePlanes Grey() const;
+};
+
+// Inline: called once per pixel ray in the inner loops.
+inline float& ImagePlanes::at(int c, int x, int y) {
+  return data[(static_cast<size_t>(c) * height + y) * width + x];
+}
+inline float ImagePlanes::at(int c, int x, int y) const {
+  return data[(static_cast<size_t>(c) * height + y) * width + x];
+}
+
+ImagePlanes ReadImage(const std::string& path);          // via OpenImageIO
+// Reads and checks width/height against the camera; error names file, both sizes.
+ImagePlanes ReadImageFor(const std::string& path, const Camera& camera);
+// Writes via OpenImageIO (format from extension: .png .tif .jpg ...); bits 8 or 16
+// (values are rounded and clamped) or 32 (float TIFF). Temp name + rename.
+void WriteImage(const std::string& path, const ImagePlanes& image, int bits = 8);
+
+}  // namespace facets

@@ -1,0 +1,299 @@
+#include "mesh/local_ops.h"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <numbers>
+#include <stdexcept>
+
+namespace facets {
+namespace {
+
+using Vec2 = Eigen::Vector2d;
+
+// Orthonormal basis of the plane orthogonal to unit n.
+void PlaneBasis(const Eigen::Vector3d& n, Eigen::Vector3d* e1, Eigen::Vector3d* e2) {
+  const Eigen::Vector3d a =
+      std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  *e1 = (a - a.dot(n) * n).normalized();
+  *e2 = n.cross(*e1);
+}
+
+double Cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+double Angle2(const Vec2& a, const Vec2& b) {
+  return std::atan2(std::abs(Cross2(a, b)), a.dot(b));
+}
+
+// The quad of an interior edge projected into its tangent plane: a, b edge ends,
+// c opposite in the face of halfedge 0, d opposite in the other face.
+struct Quad {
+  TinMesh::VertexHandle va, vb, vc, vd;
+  Vec2 a, b, c, d;
+};
+
+bool EdgeQuad(const TinMesh& mesh, TinMesh::EdgeHandle eh, Quad* q) {
+  if (mesh.is_boundary(eh)) return false;
+  const auto h0 = mesh.halfedge_handle(eh, 0), h1 = mesh.halfedge_handle(eh, 1);
+  q->va = mesh.from_vertex_handle(h0);
+  q->vb = mesh.to_vertex_handle(h0);
+  q->vc = mesh.to_vertex_handle(mesh.next_halfedge_handle(h0));
+  q->vd = mesh.to_vertex_handle(mesh.next_halfedge_handle(h1));
+  // Mean of all four vertex normals rather than only the edge's two: the plane is then
+  // the same before and after a flip, so the criterion cannot flip an edge back and
+  // forth (with the edge's two normals only, ab and its flip cd can both fail it).
+  Eigen::Vector3d n = ToEigen(mesh.normal(q->va)) + ToEigen(mesh.normal(q->vb)) +
+                      ToEigen(mesh.normal(q->vc)) + ToEigen(mesh.normal(q->vd));
+  if (n.norm() < 1e-12) {
+    n = ToEigen(mesh.calc_face_normal(mesh.face_handle(h0)) +
+                mesh.calc_face_normal(mesh.face_handle(h1)));
+  }
+  n.normalize();
+  Eigen::Vector3d e1, e2;
+  PlaneBasis(n, &e1, &e2);
+  const Eigen::Vector3d o = ToEigen(mesh.point(q->va));
+  auto proj = [&](TinMesh::VertexHandle v) {
+    const Eigen::Vector3d p = ToEigen(mesh.point(v)) - o;
+    return Vec2(p.dot(e1), p.dot(e2));
+  };
+  q->a = proj(q->va);
+  q->b = proj(q->vb);
+  q->c = proj(q->vc);
+  q->d = proj(q->vd);
+  return true;
+}
+
+void UpdateFaceNormalsAround(TinMesh* mesh, TinMesh::VertexHandle v) {
+  for (auto f : mesh->vf_range(v)) mesh->set_normal(f, mesh->calc_face_normal(f));
+}
+
+}  // namespace
+
+TinMesh::VertexHandle SplitEdge(TinMesh* mesh, TinMesh::EdgeHandle eh) {
+  const EdgeCurve curve = MakeEdgeCurve(*mesh, eh);
+  const auto vh = mesh->add_vertex(ToOpenMesh(curve.Point(0.5)));
+  mesh->set_normal(vh, ToOpenMesh(curve.Normal(0.5)));
+  mesh->split_edge(eh, vh);
+  UpdateFaceNormalsAround(mesh, vh);
+  return vh;
+}
+
+bool IsTangentDelaunay(const TinMesh& mesh, TinMesh::EdgeHandle eh, double tolerance) {
+  Quad q;
+  if (!EdgeQuad(mesh, eh, &q)) return true;
+  const double angle_c = Angle2(q.a - q.c, q.b - q.c);
+  const double angle_d = Angle2(q.a - q.d, q.b - q.d);
+  return angle_c + angle_d <= std::numbers::pi + tolerance;
+}
+
+bool CanFlip(const TinMesh& mesh, TinMesh::EdgeHandle eh) {
+  Quad q;
+  if (!EdgeQuad(mesh, eh, &q) || !mesh.is_flip_ok(eh)) return false;
+  // Current faces (a, b, c) and (b, a, d) are counter-clockwise in the plane when not
+  // folded; the flipped ones are (c, a, d) and (d, b, c).
+  const double scale = (q.b - q.a).squaredNorm() + (q.c - q.d).squaredNorm();
+  const double eps = 1e-12 * scale;
+  return Cross2(q.a - q.c, q.d - q.c) > eps && Cross2(q.b - q.d, q.c - q.d) > eps;
+}
+
+int MakeTangentDelaunay(TinMesh* mesh, int max_flips) {
+  if (max_flips <= 0) max_flips = 10 * static_cast<int>(mesh->n_edges()) + 10;
+  std::deque<TinMesh::EdgeHandle> queue;
+  std::vector<char> queued(mesh->n_edges(), 1);
+  for (auto e : mesh->edges()) queue.push_back(e);
+  int flips = 0;
+  while (!queue.empty() && flips < max_flips) {
+    const auto e = queue.front();
+    queue.pop_front();
+    queued[e.idx()] = 0;
+    if (mesh->status(e).deleted() || IsTangentDelaunay(*mesh, e) || !CanFlip(*mesh, e)) {
+      continue;
+    }
+    mesh->flip(e);
+    ++flips;
+    const auto h0 = mesh->halfedge_handle(e, 0), h1 = mesh->halfedge_handle(e, 1);
+    mesh->set_normal(mesh->face_handle(h0), mesh->calc_face_normal(mesh->face_handle(h0)));
+    mesh->set_normal(mesh->face_handle(h1), mesh->calc_face_normal(mesh->face_handle(h1)));
+    for (auto h : {h0, h1}) {
+      for (auto hh : {mesh->next_halfedge_handle(h), mesh->prev_halfedge_handle(h)}) {
+        const auto ee = mesh->edge_handle(hh);
+        if (!queued[ee.idx()]) {
+          queued[ee.idx()] = 1;
+          queue.push_back(ee);
+        }
+      }
+    }
+  }
+  return flips;
+}
+
+bool RemoveVertex(TinMesh* mesh, TinMesh::VertexHandle vh) {
+  TinMesh::HalfedgeHandle best;
+  double best_len = 0.0;
+  for (auto h : mesh->voh_range(vh)) {
+    if (!mesh->is_collapse_ok(h)) continue;
+    // On the boundary only collapse along the boundary, so the rim keeps its shape.
+    if (mesh->is_boundary(vh) && !mesh->is_boundary(mesh->edge_handle(h))) continue;
+    const double len = mesh->calc_edge_length(h);
+    if (!best.is_valid() || len < best_len) {
+      best = h;
+      best_len = len;
+    }
+  }
+  if (!best.is_valid()) return false;
+  const auto keep = mesh->to_vertex_handle(best);
+  mesh->collapse(best);
+  UpdateFaceNormalsAround(mesh, keep);
+  // Restore Delaunay in the neighbourhood: flip edges of the kept vertex's star.
+  bool flipped = true;
+  for (int round = 0; flipped && round < 20; ++round) {
+    flipped = false;
+    std::vector<TinMesh::EdgeHandle> edges;
+    for (auto f : mesh->vf_range(keep)) {
+      for (auto e : mesh->fe_range(f)) edges.push_back(e);
+    }
+    for (auto e : edges) {
+      if (!mesh->status(e).deleted() && !IsTangentDelaunay(*mesh, e) && CanFlip(*mesh, e)) {
+        mesh->flip(e);
+        for (int s = 0; s < 2; ++s) {
+          const auto f = mesh->face_handle(mesh->halfedge_handle(e, s));
+          mesh->set_normal(f, mesh->calc_face_normal(f));
+        }
+        flipped = true;
+      }
+    }
+  }
+  mesh->garbage_collection();
+  return true;
+}
+
+void SmoothingOptions::Check() const {
+  if (iterations < 0) throw std::invalid_argument("SmoothingOptions: iterations < 0");
+  if (!(step > 0.0 && step <= 0.5)) {
+    throw std::invalid_argument("SmoothingOptions: step must be in (0, 0.5]");
+  }
+}
+
+SmoothingReport TangentialSmooth(TinMesh* mesh, const SmoothingOptions& options) {
+  options.Check();
+  SmoothingReport report;
+  const size_t nv = mesh->n_vertices();
+  std::vector<Eigen::Vector3d> new_point(nv), new_normal(nv);
+  for (int it = 0; it < options.iterations; ++it) {
+    const std::vector<G1Patch> patches = BuildPatches(*mesh);
+    for (auto v : mesh->vertices()) {
+      const Eigen::Vector3d p = ToEigen(mesh->point(v));
+      const Eigen::Vector3d n = ToEigen(mesh->normal(v));
+      new_point[v.idx()] = p;
+      new_normal[v.idx()] = n;
+      if ((options.fix_boundary && mesh->is_boundary(v)) || mesh->valence(v) == 0) continue;
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      int count = 0;
+      for (auto w : mesh->vv_range(v)) {
+        centroid += ToEigen(mesh->point(w));
+        ++count;
+      }
+      centroid /= count;
+      Eigen::Vector3d delta = options.step * (centroid - p);
+      delta -= delta.dot(n) * n;
+      const Eigen::Vector3d target = p + delta;
+      Eigen::Vector3d moved = target, moved_normal = n;
+      if (options.stay_on_surface) {
+        Eigen::Vector3d e1, e2;
+        PlaneBasis(n, &e1, &e2);
+        bool found = false;
+        for (auto f : mesh->vf_range(v)) {
+          const G1Patch& patch = patches[f.idx()];
+          Vec2 x[3];
+          for (int k = 0; k < 3; ++k) {
+            const Eigen::Vector3d r = patch.vertex(k) - p;
+            x[k] = Vec2(r.dot(e1), r.dot(e2));
+          }
+          const Vec2 t(delta.dot(e1), delta.dot(e2));
+          const double area = Cross2(x[1] - x[0], x[2] - x[0]);
+          if (std::abs(area) < 1e-300) continue;
+          const double b1 = Cross2(t - x[0], x[2] - x[0]) / area;
+          const double b2 = Cross2(x[1] - x[0], t - x[0]) / area;
+          const double b0 = 1.0 - b1 - b2;
+          const double eps = -1e-12;
+          if (b0 >= eps && b1 >= eps && b2 >= eps) {
+            const SurfacePoint sp = patch.EvaluateWithDerivatives(b1, b2);
+            moved = sp.point;
+            moved_normal = sp.normal;
+            found = true;
+            break;
+          }
+        }
+        if (!found) ++report.off_surface;
+      }
+      new_point[v.idx()] = moved;
+      new_normal[v.idx()] = moved_normal;
+      const double move = (moved - p).norm();
+      if (move > 0.0) ++report.moved;
+      report.max_move = std::max(report.max_move, move);
+    }
+    for (auto v : mesh->vertices()) {
+      mesh->set_point(v, ToOpenMesh(new_point[v.idx()]));
+      mesh->set_normal(v, ToOpenMesh(new_normal[v.idx()]));
+    }
+    for (auto f : mesh->faces()) mesh->set_normal(f, mesh->calc_face_normal(f));
+  }
+  return report;
+}
+
+void QualityOptions::Check() const {
+  if (!(target_edge_length > 0.0) || !std::isfinite(target_edge_length)) {
+    throw std::invalid_argument("QualityOptions: target_edge_length must be positive");
+  }
+  if (!(split_factor > 1.0)) throw std::invalid_argument("QualityOptions: split_factor <= 1");
+  if (max_rounds < 0) throw std::invalid_argument("QualityOptions: max_rounds < 0");
+}
+
+QualityReport QualityPass(TinMesh* mesh, const QualityOptions& options) {
+  options.Check();
+  QualityReport report;
+  const double limit = options.split_factor * options.target_edge_length;
+  for (int round = 0; round < options.max_rounds; ++round) {
+    std::vector<std::pair<double, TinMesh::EdgeHandle>> long_edges;
+    for (auto e : mesh->edges()) {
+      const double len = mesh->calc_edge_length(e);
+      if (len > limit) long_edges.emplace_back(len, e);
+    }
+    if (long_edges.empty()) break;
+    // Longest first; edges created by earlier splits in this round wait for the next.
+    std::sort(long_edges.begin(), long_edges.end(),
+              [](const auto& x, const auto& y) { return x.first > y.first; });
+    for (const auto& [len, e] : long_edges) {
+      if (mesh->calc_edge_length(e) <= limit) continue;
+      SplitEdge(mesh, e);
+      ++report.splits;
+    }
+  }
+  report.flips = MakeTangentDelaunay(mesh);
+  for (auto e : mesh->edges()) {
+    report.max_edge_length = std::max(report.max_edge_length, mesh->calc_edge_length(e));
+  }
+  return report;
+}
+
+AngleStats FaceAngleStats(const TinMesh& mesh) {
+  AngleStats stats;
+  stats.min_angle = std::numbers::pi;
+  double sum = 0.0;
+  for (auto f : mesh.faces()) {
+    Eigen::Vector3d x[3];
+    int k = 0;
+    for (auto v : mesh.fv_range(f)) x[k++] = ToEigen(mesh.point(v));
+    double m = std::numbers::pi;
+    for (int i = 0; i < 3; ++i) {
+      const Eigen::Vector3d a = x[(i + 1) % 3] - x[i], b = x[(i + 2) % 3] - x[i];
+      m = std::min(m, std::atan2(a.cross(b).norm(), a.dot(b)));
+    }
+    stats.min_angle = std::min(stats.min_angle, m);
+    sum += m;
+  }
+  stats.mean_min_angle = mesh.n_faces() ? sum / mesh.n_faces() : 0.0;
+  return stats;
+}
+
+}  // namespace facets

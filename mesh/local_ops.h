@@ -1,0 +1,83 @@
+// Local topological operations on the TIN (DESIGN.md section 3): edge split, edge flip
+// by the Delaunay criterion in the local tangent plane, vertex removal, tangential
+// Laplacian smoothing and the quality pass that keeps the point density homogeneous.
+// None of them re-triangulates globally.
+#pragma once
+
+#include "mesh/tin.h"
+
+namespace facets {
+
+// Splits edge eh at the midpoint of its G1 boundary curve (not the chord midpoint);
+// the new vertex's normal is the G1 surface normal there, so the surface barely
+// changes. The two (or one, on the boundary) adjacent triangles become four (two).
+TinMesh::VertexHandle SplitEdge(TinMesh* mesh, TinMesh::EdgeHandle eh);
+
+// Tangent plane of edge (a, b) with opposite vertices c, d: normal = normalised mean of
+// the four vertex normals (symmetric in the quad, so an edge and its flip are judged
+// in the same plane and flips cannot cycle). The four vertices are projected onto it;
+// the edge is Delaunay when the two angles opposite it sum to at most pi
+// (+ tolerance). Boundary edges are.
+bool IsTangentDelaunay(const TinMesh& mesh, TinMesh::EdgeHandle eh, double tolerance = 1e-9);
+// True when flipping eh is topologically allowed and the flipped pair is not folded in
+// the edge's tangent plane (both new triangles positively oriented).
+bool CanFlip(const TinMesh& mesh, TinMesh::EdgeHandle eh);
+// Flips every non-Delaunay edge that CanFlip until all are Delaunay (edge queue; at most
+// max_flips flips, 0 = 10 * number of edges). Returns the number of flips.
+int MakeTangentDelaunay(TinMesh* mesh, int max_flips = 0);
+
+// Removes vertex vh by collapsing its shortest collapsible outgoing edge into the
+// neighbour, then restores tangent-plane Delaunay around that neighbour. Calls
+// garbage_collection(): all handles and indices are invalidated. Returns false (and
+// leaves the mesh unchanged) when no collapse is topologically allowed.
+bool RemoveVertex(TinMesh* mesh, TinMesh::VertexHandle vh);
+
+struct SmoothingOptions {
+  int iterations = 1;
+  // Fraction of the way to the neighbours' centroid (tangential part) per iteration;
+  // at most 0.5 so a vertex never jumps over its one-ring.
+  double step = 0.5;
+  // Boundary vertices stay where they are (a 2.5D start grid's rim defines the ROI).
+  bool fix_boundary = true;
+  // true: the moved vertex is put back onto the G1 surface of the previous iteration
+  // (located in the adjacent face whose tangent-plane projection contains it), with
+  // that surface's normal, so smoothing does not change the shape beyond the
+  // interpolation error. false: the vertex stays in its tangent plane.
+  bool stay_on_surface = true;
+  void Check() const;
+};
+struct SmoothingReport {
+  int moved = 0;             // vertex moves summed over iterations
+  double max_move = 0.0;     // largest single move
+  int off_surface = 0;       // moves that could not be located in a face
+};
+SmoothingReport TangentialSmooth(TinMesh* mesh, const SmoothingOptions& options = {});
+
+struct QualityOptions {
+  // Target edge length of this level (the engine derives it from the grey-facet size).
+  double target_edge_length = 1.0;
+  // Edges longer than this factor times the target are split; 1.5 keeps the halves
+  // (0.75 target or more) from getting too short.
+  double split_factor = 1.5;
+  // Rounds of splitting; each round halves the longest edges.
+  int max_rounds = 20;
+  void Check() const;
+};
+struct QualityReport {
+  int splits = 0;
+  int flips = 0;
+  double max_edge_length = 0.0;  // after the pass
+};
+// Splits edges that grew too long (walls standing up out of a 2.5D start) at their G1
+// midpoints, then flips to restore tangent-plane Delaunay. Vertex normals of old
+// vertices are kept; face normals updated.
+QualityReport QualityPass(TinMesh* mesh, const QualityOptions& options);
+
+// Mean over faces of the smallest angle (radians), and the smallest over all faces.
+struct AngleStats {
+  double min_angle = 0.0;
+  double mean_min_angle = 0.0;
+};
+AngleStats FaceAngleStats(const TinMesh& mesh);
+
+}  // namespace facets

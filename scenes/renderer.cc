@@ -1,0 +1,336 @@
+#include "scenes/renderer.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <stdexcept>
+
+#include "io/colmap_io.h"
+#include "io/image_io.h"
+#include "io/ply_io.h"
+#include "io/project_io.h"
+#include "scenes/camera_layout.h"
+
+namespace facets {
+namespace fs = std::filesystem;
+
+Renderer::Renderer(const Scene& scene, const TruthMesh& mesh, EmbreeDevice& device)
+    : scene_(scene),
+      mesh_(mesh),
+      albedo_(scene.albedo),
+      sun_direction_(scene.sun.Direction()),
+      embree_(std::make_unique<TriangleScene>(device, mesh.vertices, mesh.faces)) {}
+
+SurfaceHit Renderer::Cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) const {
+  const Eigen::Vector3d d = direction.normalized();
+  const RayHit hit = embree_->Intersect(origin, d);
+  if (!hit.hit) return SurfaceHit();
+  return Resolve(origin, d, static_cast<int>(hit.prim_id), hit.u, hit.v);
+}
+
+SurfaceHit Renderer::Resolve(const Eigen::Vector3d& origin, const Eigen::Vector3d& d, int face,
+                             float u, float v) const {
+  SurfaceHit out;
+  out.hit = true;
+  out.face = face;
+  // Embree's float ray is ~1e-4 m off at 2 km range: intersect the double ray with
+  // the plane of the face it found instead.
+  const Eigen::Vector3i& F = mesh_.faces[out.face];
+  const Eigen::Vector3d& v0 = mesh_.vertices[F[0]];
+  const Eigen::Vector3d n = (mesh_.vertices[F[1]] - v0).cross(mesh_.vertices[F[2]] - v0);
+  const double nd = n.dot(d);
+  if (std::abs(nd) > 1e-12 * n.norm()) {
+    out.distance = n.dot(v0 - origin) / nd;
+    out.point = origin + out.distance * d;
+  } else {
+    out.point = mesh_.Point(out.face, u, v);
+    out.distance = (out.point - origin).norm();
+  }
+  out.normal = mesh_.ShadingNormal(out.face, u, v);
+  // Two-sided shading: a face seen from behind is lit as seen from the front.
+  if (out.normal.dot(d) > 0) out.normal = -out.normal;
+  return out;
+}
+
+double Renderer::Radiance(const SurfaceHit& hit) const {
+  if (!hit.hit) return 0.0;
+  return 255.0 * LambertShading(albedo_(hit.point), hit.normal, scene_.sun, sun_direction_);
+}
+
+double Renderer::RadianceAtPixel(const Camera& camera, const BlockImage& image,
+                                 const Eigen::Vector2d& pixel) const {
+  const Eigen::Vector3d dir = image.cam_from_world.rotation.conjugate() * camera.CamFromImage(pixel);
+  return Radiance(Cast(image.ProjectionCentre(), dir));
+}
+
+std::vector<float> Renderer::RenderClean(const Camera& camera, const BlockImage& image,
+                                         int supersampling) const {
+  const int w = camera.width, h = camera.height, S = supersampling;
+  std::vector<float> out(static_cast<size_t>(w) * h, 0.0f);
+  const Eigen::Matrix3d world_from_cam = image.cam_from_world.rotation.conjugate().toRotationMatrix();
+  const Eigen::Vector3d centre = image.ProjectionCentre();
+  const RTCScene rtc_scene = embree_->get();
+  tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
+    // One row of pixels = w * S * S rays, traced as one coherent stream (Embree's
+    // rtcIntersect1M: packets inside; half the CPU time of single rays here).
+    std::vector<RTCRayHit> rays(static_cast<size_t>(w) * S * S);
+    std::vector<Eigen::Vector3d> dirs(rays.size());
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      size_t r = 0;
+      for (int x = 0; x < w; ++x) {
+        for (int j = 0; j < S; ++j) {
+          for (int i = 0; i < S; ++i, ++r) {
+            const Eigen::Vector2d px(x + (i + 0.5) / S, y + (j + 0.5) / S);
+            dirs[r] = (world_from_cam * camera.CamFromImage(px)).normalized();
+            RTCRayHit& rh = rays[r];
+            rh.ray.org_x = static_cast<float>(centre.x());
+            rh.ray.org_y = static_cast<float>(centre.y());
+            rh.ray.org_z = static_cast<float>(centre.z());
+            rh.ray.dir_x = static_cast<float>(dirs[r].x());
+            rh.ray.dir_y = static_cast<float>(dirs[r].y());
+            rh.ray.dir_z = static_cast<float>(dirs[r].z());
+            rh.ray.tnear = 0.0f;
+            rh.ray.tfar = 1e30f;
+            rh.ray.mask = ~0u;
+            rh.ray.flags = 0;
+            rh.ray.time = 0;
+            rh.ray.id = static_cast<unsigned>(r);
+            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+            rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+          }
+        }
+      }
+      RTCIntersectContext context;
+      rtcInitIntersectContext(&context);
+      context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+      rtcIntersect1M(rtc_scene, &context, rays.data(), static_cast<unsigned>(rays.size()),
+                     sizeof(RTCRayHit));
+      r = 0;
+      for (int x = 0; x < w; ++x) {
+        double sum = 0;
+        for (int k = 0; k < S * S; ++k, ++r) {
+          const RTCRayHit& rh = rays[r];
+          if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+          sum += Radiance(Resolve(centre, dirs[r], static_cast<int>(rh.hit.primID), rh.hit.u,
+                                  rh.hit.v));
+        }
+        out[static_cast<size_t>(y) * w + x] = static_cast<float>(sum / (S * S));
+      }
+    }
+  });
+  return out;
+}
+
+std::vector<uint8_t> AddNoiseAndQuantise(const std::vector<float>& clean, double sigma,
+                                         uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, sigma > 0 ? sigma : 1.0);
+  std::vector<uint8_t> out(clean.size());
+  for (size_t i = 0; i < clean.size(); ++i) {
+    const double g = clean[i] + (sigma > 0 ? noise(rng) : 0.0);
+    out[i] = static_cast<uint8_t>(std::clamp(std::lround(g), 0L, 255L));
+  }
+  return out;
+}
+
+int SampleTiePoints(const Scene& scene, const TruthMesh& mesh, const Renderer& renderer,
+                    uint32_t seed, ImageBlock* block) {
+  // Faces whose centroid lies in the ROI, drawn with probability proportional to area.
+  std::vector<int> faces;
+  std::vector<double> cumulative;
+  double total = 0;
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const Eigen::Vector3i& F = mesh.faces[f];
+    const Eigen::Vector3d centroid =
+        (mesh.vertices[F[0]] + mesh.vertices[F[1]] + mesh.vertices[F[2]]) / 3;
+    if (!scene.roi.Contains(centroid)) continue;
+    total += 0.5 * (mesh.vertices[F[1]] - mesh.vertices[F[0]])
+                       .cross(mesh.vertices[F[2]] - mesh.vertices[F[0]])
+                       .norm();
+    faces.push_back(static_cast<int>(f));
+    cumulative.push_back(total);
+  }
+  if (faces.empty() || scene.tie_points == 0) return 0;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  long long next_id = 1;
+  const int max_attempts = 30 * scene.tie_points;
+  for (int attempt = 0; attempt < max_attempts &&
+                        static_cast<int>(block->points.size()) < scene.tie_points;
+       ++attempt) {
+    const double r = unit(rng) * total;
+    const int f = faces[std::lower_bound(cumulative.begin(), cumulative.end(), r) -
+                        cumulative.begin()];
+    double a = unit(rng), b = unit(rng);
+    if (a + b > 1) {
+      a = 1 - a;
+      b = 1 - b;
+    }
+    const Eigen::Vector3d p = mesh.Point(f, a, b);
+    std::vector<std::pair<size_t, Eigen::Vector2d>> seen;
+    for (size_t k = 0; k < block->images.size(); ++k) {
+      const BlockImage& image = block->images[k];
+      const Camera& camera = block->CameraOf(image);
+      const Eigen::Vector3d pc = image.cam_from_world * p;
+      if (pc.z() <= 0) continue;
+      const Eigen::Vector2d px = camera.ImageFromCam(pc);
+      if (px.x() < 1 || px.y() < 1 || px.x() > camera.width - 1 || px.y() > camera.height - 1) {
+        continue;
+      }
+      const Eigen::Vector3d c = image.ProjectionCentre();
+      const double range = (p - c).norm();
+      const SurfaceHit hit = renderer.Cast(c, p - c);
+      // Visible: the first hit is the point itself (float ray, double point).
+      if (!hit.hit || std::abs(hit.distance - range) > 0.01 + 1e-5 * range) continue;
+      // Not at grazing incidence, where a matcher would not find it either.
+      if (std::abs(hit.normal.dot((p - c) / range)) < 0.2) continue;
+      seen.emplace_back(k, px);
+    }
+    if (seen.size() < 2) continue;
+    TiePoint tie;
+    tie.point3d_id = next_id++;
+    // Start values, not truth: perturbed, the 3D offset truncated at 2 sigma.
+    Eigen::Vector3d e;
+    do {
+      e = Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
+    } while (e.norm() > 2);
+    tie.xyz = p + scene.tie_point_sigma * e;
+    SurfaceHit on_surface = renderer.Cast(block->images[seen[0].first].ProjectionCentre(),
+                                          p - block->images[seen[0].first].ProjectionCentre());
+    const int grey = static_cast<int>(std::lround(std::clamp(renderer.Radiance(on_surface), 0.0, 255.0)));
+    tie.rgb = Eigen::Vector3i(grey, grey, grey);
+    double error = 0;
+    for (const auto& [k, px] : seen) {
+      BlockImage& image = block->images[k];
+      const Eigen::Vector2d reprojected =
+          block->CameraOf(image).ImageFromCam(image.cam_from_world * tie.xyz);
+      error += (reprojected - px).norm();
+      tie.track.push_back({image.image_id, static_cast<int>(image.keypoints.size())});
+      image.keypoints.push_back({px, tie.point3d_id});
+    }
+    tie.error = error / seen.size();
+    block->points.push_back(tie);
+  }
+  return static_cast<int>(block->points.size());
+}
+
+namespace {
+
+void WriteTruthJson(const Scene& scene, const ImageBlock& block, const TruthMesh& mesh,
+                    const std::string& path) {
+  nlohmann::json j;
+  j["scene"] = scene.name;
+  j["ground_pixel_size"] = scene.ground_pixel_size;
+  j["region_of_interest"] = {{"min", {scene.roi.min.x(), scene.roi.min.y(), scene.roi.min.z()}},
+                             {"max", {scene.roi.max.x(), scene.roi.max.y(), scene.roi.max.z()}}};
+  j["labels"] = {{"0", "ground"}, {"1", "roof"}, {"2", "wall"}, {"3", "object"}};
+  j["noise_sigma"] = scene.noise_sigma;
+  j["supersampling"] = scene.supersampling;
+  j["seed"] = scene.seed;
+  j["mean_terrain_height"] = scene.mean_terrain_height;
+  j["images"] = block.images.size();
+  j["tie_points"] = block.points.size();
+  j["truth_mesh"] = {{"file", "truth.ply"},
+                     {"vertices", mesh.vertices.size()},
+                     {"faces", mesh.faces.size()},
+                     {"sagitta_tolerance", scene.sagitta_tolerance}};
+  nlohmann::json shapes = nlohmann::json::array();
+  if (scene.json.contains("surface")) shapes = scene.json["surface"];
+  j["shapes"] = shapes;
+  j["sun"] = {{"azimuth_deg", scene.sun.azimuth_deg},
+              {"elevation_deg", scene.sun.elevation_deg},
+              {"ambient", scene.sun.ambient}};
+  std::ofstream out(path);
+  out << j.dump(2) << "\n";
+  if (!out) throw std::runtime_error(path + ": cannot write");
+}
+
+std::string TempSuffix() {
+  std::random_device rd;
+  return std::to_string(getpid()) + "-" + std::to_string(rd() % 100000);
+}
+
+}  // namespace
+
+RenderSummary RenderScene(const Scene& scene_in, const std::string& out_dir,
+                          const RenderOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Scene scene = scene_in;
+  if (options.seed) scene.seed = *options.seed;
+  if (options.noise_sigma) scene.noise_sigma = *options.noise_sigma;
+  if (options.supersampling) scene.supersampling = *options.supersampling;
+  scene.json["seed"] = scene.seed;
+  scene.json["noise_sigma"] = scene.noise_sigma;
+  scene.json["supersampling"] = scene.supersampling;
+  scene.Check();
+
+  const TruthMesh mesh = BuildTruthMesh(scene);
+  ImageBlock block = BuildImageBlock(scene);
+  const Renderer renderer(scene, mesh);
+  RenderSummary summary;
+  summary.triangles = static_cast<int>(mesh.faces.size());
+  summary.tie_points =
+      SampleTiePoints(scene, mesh, renderer, static_cast<uint32_t>(scene.seed) * 7u + 1u, &block);
+
+  fs::path out(out_dir);
+  if (out.filename().empty()) out = out.parent_path();
+  const fs::path tmp = out.string() + ".tmp-" + TempSuffix();
+  fs::create_directories(tmp / "images");
+  try {
+    for (size_t i = 0; i < block.images.size(); ++i) {
+      BlockImage& image = block.images[i];
+      const Camera& camera = block.CameraOf(image);
+      const auto r0 = std::chrono::steady_clock::now();
+      const std::vector<float> clean = renderer.RenderClean(camera, image, scene.supersampling);
+      summary.render_seconds +=
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
+      const std::vector<uint8_t> grey = AddNoiseAndQuantise(
+          clean, scene.noise_sigma,
+          static_cast<uint32_t>(scene.seed) * 1000003u + static_cast<uint32_t>(image.image_id));
+      ImagePlanes planes;
+      planes.width = camera.width;
+      planes.height = camera.height;
+      planes.channels = 1;
+      planes.bits = 8;
+      planes.data.assign(grey.begin(), grey.end());
+      // Path inside the temp folder: the project file stores it relative to itself.
+      image.path = (tmp / "images" / image.name).string();
+      WriteImage(image.path, planes, 8);
+      summary.pixels += static_cast<long long>(camera.width) * camera.height;
+      ++summary.images;
+      if (options.progress) options.progress(static_cast<int>(i) + 1, static_cast<int>(block.images.size()), image.name);
+    }
+    WriteColmapModel(block, (tmp / "sparse").string());
+    WriteProject(block, (tmp / "project.json").string());
+    WritePly((tmp / "truth.ply").string(), mesh.ToMeshData());
+    WriteTruthJson(scene, block, mesh, (tmp / "truth.json").string());
+    {
+      std::ofstream copy(tmp / "scene.json");
+      copy << scene.json.dump(2) << "\n";
+      if (!copy) throw std::runtime_error((tmp / "scene.json").string() + ": cannot write");
+    }
+    // Swap in the finished folder: the old output (if any) is removed only after.
+    fs::path old;
+    if (fs::exists(out)) {
+      old = out.string() + ".old-" + TempSuffix();
+      fs::rename(out, old);
+    }
+    fs::rename(tmp, out);
+    if (!old.empty()) fs::remove_all(old);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove_all(tmp, ec);
+    throw;
+  }
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return summary;
+}
+
+}  // namespace facets

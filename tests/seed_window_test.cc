@@ -1,0 +1,180 @@
+// End-to-end: one window of the engine core on the seed gable-roof stereo pair
+// (DESIGN.md section 7; issue 5 acceptance). Renders the bundled scene, starts from the
+// true surface shifted down, adjusts on the finest level and compares with the truth.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <optional>
+
+#include <Eigen/Geometry>
+
+#include "engine/window_adjustment.h"
+#include "io/colmap_io.h"
+#include "io/image_io.h"
+#include "mesh/tin.h"
+#include "scenes/renderer.h"
+#include "scenes/scene.h"
+#include "scenes/truth_mesh.h"
+
+namespace facets {
+namespace {
+
+struct SeedResult {
+  WindowReport report;
+  double rms = 0.0;          // true height errors, interior vertices (m)
+  double rms_surface = 0.0;  // true height errors of the G1 surface (tessellation nodes
+                             // of faces away from the window border), m
+  double mean_sigma = 0.0;   // mean reported sigma of dn, interior vertices (m)
+  double rms_patch = 0.0, mean_sigma_patch = 0.0, mean_sigma_outside = 0.0;
+};
+
+struct SeedRun {
+  std::string scene_file = "seed_gable_parallel.json";
+  double noise = 4.0;
+  double shift = 0.3;
+  AdjustmentOptions options;
+  // Constant-albedo patch (XY rectangle, min/max), to split the statistics.
+  std::optional<Eigen::AlignedBox2d> patch;
+};
+
+SeedResult RunSeedWindow(const SeedRun& run) {
+  const Scene scene = LoadScene(run.scene_file[0] == '/' ? run.scene_file : std::string(FACETS_SOURCE_DIR) + "/scenes/data/" + run.scene_file);
+  const std::string dir = testing::TempDir() + "/facets_" + scene.name + "_" +
+                          std::to_string(static_cast<int>(run.noise * 10));
+  RenderOptions render_options;
+  render_options.noise_sigma = run.noise;
+  RenderScene(scene, dir, render_options);
+
+  const ImageBlock block = ReadColmapModel(dir + "/sparse", dir + "/images");
+  std::vector<ImagePlanes> planes;
+  for (const auto& image : block.images) planes.push_back(ReadImageFor(image.path, block.CameraOf(image)).Grey());
+  std::vector<LevelImage> images;
+  for (size_t k = 0; k < block.images.size(); ++k) {
+    images.push_back({block.images[k].image_id, &block.CameraOf(block.images[k]),
+                      block.images[k].cam_from_world, &planes[k]});
+  }
+
+  const TruthMesh truth = BuildTruthMesh(scene);
+  const Renderer renderer(scene, truth);
+  auto truth_z = [&](double x, double y) {
+    return renderer.Cast(Eigen::Vector3d(x, y, 1000.0), Eigen::Vector3d(0, 0, -1)).point.z();
+  };
+  StartGridOptions grid;
+  grid.min = scene.roi.min.head<2>();
+  grid.max = scene.roi.max.head<2>();
+  grid.spacing = 2.0;  // 4x4 grey facets of 0.5 m = about 2x2 pixels (seed 000)
+  grid.height = [&](double x, double y) { return truth_z(x, y) - run.shift; };
+  TinMesh mesh = MakeStartGrid(grid);
+
+  WindowAdjustment adjustment(&mesh, images, run.options);
+  SeedResult result;
+  result.report = adjustment.Run();
+
+  // Constant-grey patch of the scene, if any (albedo patches in XY).
+  double sum2 = 0, sum_sigma = 0, patch2 = 0, patch_sigma = 0, outside_sigma = 0;
+  int count = 0, patch_count = 0, outside_count = 0;
+  for (auto vh : mesh.vertices()) {
+    if (mesh.is_boundary(vh)) continue;
+    const Eigen::Vector3d x = ToEigen(mesh.point(vh));
+    const double dz = x.z() - truth_z(x.x(), x.y());
+    sum2 += dz * dz;
+    if (run.patch) {
+      // Inside: all adjacent faces on the patch; around: a 1-4 m ring outside it.
+      Eigen::AlignedBox2d inner(run.patch->min().array() + 1.0, run.patch->max().array() - 1.0);
+      const double outside = run.patch->exteriorDistance(x.head<2>());
+      if (inner.contains(x.head<2>())) {
+        patch2 += dz * dz;
+        patch_sigma += result.report.vertex_sigma[vh.idx()];
+        ++patch_count;
+      } else if (outside > 1.0 && outside < 4.0) {
+        outside_sigma += result.report.vertex_sigma[vh.idx()];
+        ++outside_count;
+      }
+    }
+    sum_sigma += result.report.vertex_sigma[vh.idx()];
+    ++count;
+  }
+  result.rms = std::sqrt(sum2 / count);
+  if (run.patch) {
+    result.rms_patch = std::sqrt(patch2 / patch_count);
+    result.mean_sigma_patch = patch_sigma / patch_count;
+    result.mean_sigma_outside = outside_sigma / outside_count;
+    std::cout << "  constant patch: " << patch_count << " vertices, rms(dZ) " << result.rms_patch
+              << " m, mean sigma " << result.mean_sigma_patch << " m; 1-4 m around it: mean sigma "
+              << result.mean_sigma_outside << " m\n";
+  }
+  {
+    // The surface itself: tessellation nodes of faces none of whose vertices lies on
+    // the window border (the G1 surface is what the user gets, not only the vertices).
+    const Tessellation& tess = adjustment.tessellation();
+    std::vector<bool> inner_face(mesh.n_faces(), true);
+    for (auto fh : mesh.faces())
+      for (auto vh : mesh.fv_range(fh))
+        if (mesh.is_boundary(vh)) inner_face[fh.idx()] = false;
+    double s2 = 0;
+    int n = 0;
+    for (size_t p = 0; p < tess.points.size(); ++p) {
+      if (!inner_face[tess.point_face[p]]) continue;
+      const double dz = tess.points[p].z() - truth_z(tess.points[p].x(), tess.points[p].y());
+      s2 += dz * dz;
+      ++n;
+    }
+    result.rms_surface = std::sqrt(s2 / n);
+  }
+  result.mean_sigma = sum_sigma / count;
+  std::cout << scene.name << " noise " << run.noise << ": " << result.report.BriefReport()
+            << "\n  rms(dZ) " << result.rms << " m (surface " << result.rms_surface << " m), mean sigma " << result.mean_sigma
+            << " m, ratio " << result.rms / result.mean_sigma << "\n";
+  for (const auto& it : result.report.iterations) {
+    std::cout << "  it " << it.iteration << " obs " << it.observations << " cg " << it.cg_iterations
+              << " sigma0 " << it.sigma0 << " max dn " << it.max_dn_interior << "/"
+              << it.max_dn_border << "/" << it.max_dn_corner << " cast " << it.seconds_cast
+              << " s, linearise " << it.seconds_linearise << " s, solve " << it.seconds_solve
+              << " s, update " << it.seconds_update << " s\n";
+  }
+  return result;
+}
+
+// Issue 5 acceptance: finest level, one window, start 0.3 m below the truth, noise 4.
+TEST(SeedWindow, GableRoofWithNoise) {
+  SeedRun run;
+  run.options.break_off = 0.005;
+  const SeedResult r = RunSeedWindow(run);
+  EXPECT_TRUE(r.report.converged);
+  EXPECT_NEAR(r.report.sigma0, 4.0, 0.4);
+  EXPECT_LE(r.rms, 0.06);
+  EXPECT_GT(r.rms / r.mean_sigma, 0.5);
+  EXPECT_LT(r.rms / r.mean_sigma, 2.0);
+}
+
+TEST(SeedWindow, GableRoofWithoutNoise) {
+  SeedRun run;
+  run.noise = 0.0;
+  run.options.break_off = 0.001;
+  const SeedResult r = RunSeedWindow(run);
+  EXPECT_TRUE(r.report.converged);
+  EXPECT_LE(r.rms, 0.015);
+}
+
+// Regularisation bridges the 8 m x 6 m constant-grey patch: no divergence, bounded
+// errors, and the reported standard deviations there are visibly higher. A lower
+// lambda than the default makes the contrast in precision visible (at 1500 the prior
+// dominates the precision everywhere). Not asserted: convergence — the run ends in a
+// limit cycle of about 1 cm at the patch (noted on issue 5).
+TEST(SeedWindow, ConstantPatchIsBridged) {
+  SeedRun run;
+  run.scene_file = "seed_gable_parallel_patch.json";
+  run.options.lambda = 500;
+  run.options.break_off = 0.005;
+  run.patch = Eigen::AlignedBox2d(Eigen::Vector2d(-2.0, -8.0), Eigen::Vector2d(6.0, -2.0));
+  const SeedResult r = RunSeedWindow(run);
+  EXPECT_NEAR(r.report.sigma0, 4.0, 0.5);
+  EXPECT_LE(r.rms_patch, 0.15);
+  EXPECT_LE(r.rms, 0.06);
+  EXPECT_GT(r.mean_sigma_patch, 1.3 * r.mean_sigma_outside);
+}
+
+}  // namespace
+}  // namespace facets
