@@ -472,6 +472,7 @@ WindowReport WindowAdjustment::Run() {
     start = std::chrono::steady_clock::now();
     solution = Eigen::VectorXd::Zero(num_unknowns_);
     const PcgSummary pcg = SolvePcg(normal_, rhs, options_.pcg, &solution);
+    rhs_ = rhs;
     it.cg_iterations = pcg.iterations;
     it.seconds_solve = Seconds(start);
 

@@ -94,6 +94,10 @@ class WindowAdjustment {
   WindowReport Run();
 
   const Tessellation& tessellation() const { return tess_; }
+  // The normal equations of the last iteration (with regularisation and ridge): for
+  // solver comparisons and benchmarks.
+  const CsrMatrix& normal_equations() const { return normal_; }
+  const Eigen::VectorXd& right_hand_side() const { return rhs_; }
   int channels() const { return channels_; }
   // Object grey values per node: grey()[node * channels() + c].
   const std::vector<double>& grey() const { return grey_; }
@@ -138,6 +142,7 @@ class WindowAdjustment {
   std::vector<std::vector<std::array<int, 2>>> rad_unknown_;  // [image][channel] -> h0, h1 (-1)
   int num_unknowns_ = 0;
   CsrMatrix normal_;
+  Eigen::VectorXd rhs_;
   // Per face and channel, CSR slots of the 18 face-local unknowns (3 vertices then 15
   // nodes of that channel): slots_[(f * C + c) * 324 + 18 * i + j], -1 if fixed.
   std::vector<int64_t> slots_;
