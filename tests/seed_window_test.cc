@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 
 #include "engine/pcg.h"
+#include "engine/level_images.h"
 #include "engine/window_adjustment.h"
 #include "io/colmap_io.h"
 #include "io/image_io.h"
@@ -51,13 +52,9 @@ SeedResult RunSeedWindow(const SeedRun& run) {
   RenderScene(scene, dir, render_options);
 
   const ImageBlock block = ReadColmapModel(dir + "/sparse", dir + "/images");
-  std::vector<ImagePlanes> planes;
-  for (const auto& image : block.images) planes.push_back(ReadImageFor(image.path, block.CameraOf(image)).Grey());
-  std::vector<LevelImage> images;
-  for (size_t k = 0; k < block.images.size(); ++k) {
-    images.push_back({block.images[k].image_id, &block.CameraOf(block.images[k]),
-                      block.images[k].cam_from_world, &planes[k]});
-  }
+  LoadedImages loaded;
+  LoadLevelImages(block, /*grey=*/true, &loaded);
+  const std::vector<LevelImage>& images = loaded.images;
 
   const TruthMesh truth = BuildTruthMesh(scene);
   const Renderer renderer(scene, truth);

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/level_images.h"
 #include "engine/window_adjustment.h"
 #include "io/colmap_io.h"
 #include "io/image_io.h"
@@ -29,13 +30,9 @@ int main(int argc, char** argv) {
     RenderScene(scene, dir);
   }
   const ImageBlock block = ReadColmapModel(dir + "/sparse", dir + "/images");
-  std::vector<ImagePlanes> planes;
-  for (const auto& image : block.images) planes.push_back(ReadImageFor(image.path, block.CameraOf(image)).Grey());
-  std::vector<LevelImage> images;
-  for (size_t k = 0; k < block.images.size(); ++k) {
-    images.push_back({block.images[k].image_id, &block.CameraOf(block.images[k]),
-                      block.images[k].cam_from_world, &planes[k]});
-  }
+  LoadedImages loaded;
+  LoadLevelImages(block, /*grey=*/true, &loaded);
+  const std::vector<LevelImage>& images = loaded.images;
   std::printf("block: %zu images; ground pixel %.3f m\n", images.size(), scene.ground_pixel_size);
   for (int threads : {1, 2}) {
     tbb::global_control control(tbb::global_control::max_allowed_parallelism, threads);
