@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "apps/evaluate_command.h"
+#include "apps/reconstruct_command.h"
 #include "apps/render_command.h"
 
 int main(int argc, char** argv) {
@@ -10,6 +11,7 @@ int main(int argc, char** argv) {
   app.add_subcommand("version", "print the version")->callback([] { std::cout << "facets 0.1\n"; });
   facets::AddRenderCommand(app);
   facets::AddEvaluateCommand(app);
+  facets::AddReconstructCommand(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
 }

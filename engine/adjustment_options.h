@@ -67,8 +67,11 @@ struct AdjustmentOptions {
   double grey_ridge = 1e-8;
 
   PcgOptions pcg;
-  // Compute per-vertex standard deviations at the end (sparse factorisation).
+  // Compute per-vertex standard deviations at the end (sparse factorisation, one
+  // solve per geometry unknown): meant for windows of a few hundred triangles; above
+  // max_precision_unknowns unknowns it is skipped (WindowReport::precision_computed).
   bool compute_precision = true;
+  int max_precision_unknowns = 60000;
   // A vertex is flagged undetermined when fewer images than this saw it, or its
   // standard deviation exceeds max_sigma (object units; 0 = no sigma test).
   int min_views = 2;

@@ -546,7 +546,9 @@ WindowReport WindowAdjustment::Run() {
 
   report.vertex_sigma.assign(num_vertices, 0.0);
   report.vertex_flags.assign(num_vertices, kVertexOk);
-  if (options_.compute_precision && num_geometry_ > 0) {
+  if (options_.compute_precision && num_geometry_ > 0 &&
+      num_unknowns_ <= options_.max_precision_unknowns) {
+    report.precision_computed = true;
     const auto start = std::chrono::steady_clock::now();
     std::vector<int> geometry(num_geometry_);
     for (int i = 0; i < num_geometry_; ++i) geometry[i] = i;

@@ -69,6 +69,7 @@ struct WindowReport {
   int crease_edges = 0;
   double seconds_total = 0.0;
   double seconds_precision = 0.0;
+  bool precision_computed = false;
   // Per TIN vertex.
   std::vector<double> vertex_sigma;  // standard deviation of dn, object units (0: fixed)
   std::vector<int> vertex_views;     // images that saw the vertex's faces

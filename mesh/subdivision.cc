@@ -1,5 +1,7 @@
 #include "mesh/subdivision.h"
 
+#include "mesh/creases.h"
+
 #include <array>
 #include <stdexcept>
 
@@ -14,7 +16,16 @@ Eigen::Vector3d ChildCornerInParent(int child, int c) {
   return table[child][c];
 }
 
-TinMesh QuaternarySubdivide(const TinMesh& mesh, const SubdivisionOptions& options) {
+namespace {
+
+// The new vertex on an edge and its normal.
+struct EdgeMidpoint {
+  Eigen::Vector3d point;
+  Eigen::Vector3d normal;
+};
+
+template <typename MidpointFn>
+TinMesh Subdivide(const TinMesh& mesh, const SubdivisionOptions& options, MidpointFn midpoint) {
   options.Check();
   TinMesh out;
   out.reserve(mesh.n_vertices() + mesh.n_edges(), 2 * mesh.n_edges() + 3 * mesh.n_faces(),
@@ -26,11 +37,9 @@ TinMesh QuaternarySubdivide(const TinMesh& mesh, const SubdivisionOptions& optio
     out.set_normal(vh.back(), mesh.normal(v));
   }
   for (auto e : mesh.edges()) {
-    // The boundary curve depends only on the edge's two vertices and normals, so both
-    // neighbouring faces agree on the new vertex.
-    const EdgeCurve curve = MakeEdgeCurve(mesh, e);
-    vh.push_back(out.add_vertex(ToOpenMesh(curve.Point(0.5))));
-    out.set_normal(vh.back(), ToOpenMesh(curve.Normal(0.5)));
+    const EdgeMidpoint m = midpoint(e);
+    vh.push_back(out.add_vertex(ToOpenMesh(m.point)));
+    out.set_normal(vh.back(), ToOpenMesh(m.normal));
   }
   const int nv = static_cast<int>(mesh.n_vertices());
   for (auto f : mesh.faces()) {
@@ -57,6 +66,35 @@ TinMesh QuaternarySubdivide(const TinMesh& mesh, const SubdivisionOptions& optio
     for (auto f : out.faces()) out.set_normal(f, out.calc_face_normal(f));
   }
   return out;
+}
+
+}  // namespace
+
+TinMesh QuaternarySubdivide(const TinMesh& mesh, const SubdivisionOptions& options) {
+  return Subdivide(mesh, options, [&](TinMesh::EdgeHandle e) {
+    // The boundary curve depends only on the edge's two vertices and normals, so both
+    // neighbouring faces agree on the new vertex.
+    const EdgeCurve curve = MakeEdgeCurve(mesh, e);
+    return EdgeMidpoint{curve.Point(0.5), curve.Normal(0.5)};
+  });
+}
+
+TinMesh QuaternarySubdivide(const TinMesh& mesh, const CornerNormals& corners,
+                            const SubdivisionOptions& options) {
+  return Subdivide(mesh, options, [&](TinMesh::EdgeHandle e) {
+    // The curve of the surface with creases: the straight chord on a crease edge, else
+    // the boundary curve from the corner normals of the adjacent faces' sector (both
+    // faces lie in the same sector at each end, so either face gives the same curve).
+    auto heh = mesh.halfedge_handle(e, 0);
+    if (!mesh.face_handle(heh).is_valid()) heh = mesh.halfedge_handle(e, 1);
+    const Eigen::Vector3d a = ToEigen(mesh.point(mesh.from_vertex_handle(heh)));
+    const Eigen::Vector3d b = ToEigen(mesh.point(mesh.to_vertex_handle(heh)));
+    const Eigen::Vector3d& n_a = corners.normals[mesh.prev_halfedge_handle(heh).idx()];
+    const Eigen::Vector3d& n_b = corners.normals[heh.idx()];
+    const EdgeCurve curve = corners.crease_edge[e.idx()] ? EdgeCurve::Straight(a, n_a, b, n_b)
+                                                          : EdgeCurve(a, n_a, b, n_b);
+    return EdgeMidpoint{curve.Point(0.5), curve.Normal(0.5)};
+  });
 }
 
 }  // namespace facets

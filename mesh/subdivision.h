@@ -23,6 +23,12 @@ struct SubdivisionOptions {
 // (m01, m12, m20), where (v0, v1, v2) is the old face's vertex order and mab is the
 // G1 boundary-curve midpoint of edge ab. There is no re-triangulation.
 TinMesh QuaternarySubdivide(const TinMesh& mesh, const SubdivisionOptions& options = {});
+// Same on the surface with creases (mesh/creases.h): new vertices on crease edges at the
+// chord midpoint, elsewhere on the curves of the sectors' corner normals, so a ridge
+// stays sharp from level to level.
+struct CornerNormals;
+TinMesh QuaternarySubdivide(const TinMesh& mesh, const CornerNormals& corners,
+                            const SubdivisionOptions& options = {});
 
 // Barycentrics within the parent face of corner c of child face 4f + child.
 Eigen::Vector3d ChildCornerInParent(int child, int c);

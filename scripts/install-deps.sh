@@ -17,6 +17,8 @@ PACKAGES=(
   libtbb-dev                               # threads
   nlohmann-json3-dev                       # project files, scenes, reports
   libcli11-dev                             # command line of the facets binary
+  view3dscene                              # tovrmlx3d: reads the .wrl products (validate-products.sh)
+  libgdal-dev                              # GeoTIFF orthophoto and DSM (io/raster_io)
 )
 
 export DEBIAN_FRONTEND=noninteractive
@@ -24,6 +26,10 @@ missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+# node + npm run the Khronos glTF validator (scripts/validate-products.sh). Only when
+# absent: a machine may have them from elsewhere (e.g. NodeSource's nodejs, which
+# conflicts with Debian's npm package).
+if ! command -v node >/dev/null || ! command -v npm >/dev/null; then missing+=(nodejs npm); fi
 if [ ${#missing[@]} -gt 0 ]; then
   $SUDO apt-get update -qq
   $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

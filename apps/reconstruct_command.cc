@@ -1,0 +1,155 @@
+#include "apps/reconstruct_command.h"
+
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <chrono>
+#include <ctime>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "engine/products.h"
+#include "engine/reconstruction.h"
+#include "io/atomic_file.h"
+#include "io/colmap_io.h"
+#include "io/project_io.h"
+
+namespace facets {
+namespace {
+
+struct ReconstructArgs {
+  std::string colmap, images, project, out;
+  int levels = 3;
+  double lambda = AdjustmentOptions().lambda;
+  std::string regularisation = "curvature";
+  std::string radiometry = "none";
+  std::string filter = "binomial5";
+  double break_off = AdjustmentOptions().break_off;
+  int max_iterations = AdjustmentOptions().max_iterations;
+  double crease_angle = AdjustmentOptions().crease_angle_deg;
+  std::optional<double> start_height;
+  int lifting_steps = 0;
+  double lifting_range = 30.0;
+  std::vector<double> roi;
+  bool colour = false;
+  int threads = 0;
+  bool no_glb = false, no_vrml = false, no_rasters = false;
+};
+
+void RunReconstruct(const ReconstructArgs& args) {
+  const auto start = std::chrono::steady_clock::now();
+  std::filesystem::create_directories(args.out);
+  std::ostringstream log;
+  auto say = [&](const std::string& line) {
+    std::cout << line << "\n" << std::flush;
+    log << line << "\n";
+  };
+  std::unique_ptr<tbb::global_control> threads;
+  if (args.threads > 0) {
+    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                    args.threads);
+  }
+  ImageBlock block;
+  if (!args.project.empty()) {
+    say("reading project " + args.project);
+    block = ReadProject(args.project);
+  } else {
+    if (args.colmap.empty() || args.images.empty()) {
+      throw std::invalid_argument("give --project FILE, or --colmap SPARSE_DIR and --images IMAGE_DIR");
+    }
+    say("reading COLMAP model " + args.colmap + " with images in " + args.images);
+    block = ReadColmapModel(args.colmap, args.images);
+  }
+  say(std::to_string(block.images.size()) + " images, " + std::to_string(block.cameras.size()) +
+      " cameras, " + std::to_string(block.points.size()) + " tie points");
+
+  ReconstructionOptions options;
+  options.levels = args.levels;
+  options.filter = PyramidFilterFromName(args.filter);
+  options.adjustment.lambda = args.lambda;
+  options.adjustment.regularisation = RegularisationFromName(args.regularisation);
+  options.adjustment.radiometry = RadiometricModelFromName(args.radiometry);
+  options.adjustment.break_off = args.break_off;
+  options.adjustment.max_iterations = args.max_iterations;
+  options.adjustment.crease_angle_deg = args.crease_angle;
+  options.start_height = args.start_height;
+  options.lifting_steps = args.lifting_steps;
+  options.lifting_range = args.lifting_range;
+  options.colour = args.colour;
+  if (!args.roi.empty()) {
+    if (args.roi.size() != 6) throw std::invalid_argument("--roi takes 6 numbers: xmin ymin zmin xmax ymax zmax");
+    RegionOfInterest roi;
+    roi.min = Eigen::Vector3d(args.roi[0], args.roi[1], args.roi[2]) - block.origin;
+    roi.max = Eigen::Vector3d(args.roi[3], args.roi[4], args.roi[5]) - block.origin;
+    options.roi = roi;
+  }
+  options.progress = say;
+  const Reconstruction result = Reconstruct(block, options);
+
+  // Products: each written to a temporary name and renamed (io/atomic_file.h).
+  say("stage products: writing into " + args.out);
+  ProductOptions products;
+  products.glb = !args.no_glb;
+  products.vrml = !args.no_vrml;
+  products.rasters = !args.no_rasters;
+  const std::vector<std::string> files = WriteProducts(result, block, args.out, products);
+  std::string list;
+  for (const auto& f : files) list += " " + f;
+  say("  written:" + list);
+  const std::filesystem::path out(args.out);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  int flagged = 0;
+  for (uint8_t f : result.vertex_flags) flagged += f != 0 ? 1 : 0;
+  say("summary: " + std::to_string(result.mesh.n_vertices()) + " vertices (" + std::to_string(flagged) +
+      " flagged), " + std::to_string(result.tessellation.triangles.size()) + " surface facets, sigma0 " +
+      std::to_string(result.report.levels.back().window.sigma0) + " grey values, " +
+      std::to_string(seconds) + " s; products in " + args.out);
+  WriteFileAtomically((out / "facets.log").string(), log.str());
+}
+
+}  // namespace
+
+void AddReconstructCommand(CLI::App& app) {
+  auto args = std::make_shared<ReconstructArgs>();
+  CLI::App* sub = app.add_subcommand("reconstruct", "reconstruct the surface from oriented images");
+  sub->set_config("--config", "", "config file with `option = value` lines; flags override it");
+  sub->add_option("--colmap", args->colmap, "COLMAP text model folder (cameras.txt, images.txt)");
+  sub->add_option("--images", args->images, "image folder of the COLMAP model");
+  sub->add_option("--project", args->project, "native project file (JSON)");
+  sub->add_option("--out", args->out, "output folder")->required();
+  sub->add_option("--levels", args->levels, "image pyramid levels (1 = no pyramid)")->capture_default_str();
+  sub->add_option("--lambda", args->lambda, "regularisation weight (docs/ENGINE.md)")->capture_default_str();
+  sub->add_option("--regularisation", args->regularisation, "curvature | adaptive | none")->capture_default_str();
+  sub->add_option("--radiometry", args->radiometry, "none | constant | linear")->capture_default_str();
+  sub->add_option("--filter", args->filter, "pyramid filter: binomial3 | binomial5 | meer13")->capture_default_str();
+  sub->add_option("--break-off", args->break_off, "largest displacement at the finest level (m)")->capture_default_str();
+  sub->add_option("--max-iterations", args->max_iterations, "per level")->capture_default_str();
+  sub->add_option("--crease-angle", args->crease_angle, "crease detection angle (deg); 180 = pure G1")->capture_default_str();
+  sub->add_option("--start-height", args->start_height, "height of the start plane (local Z)");
+  sub->add_option("--lifting-steps", args->lifting_steps, "object lifting: start heights to try (0 = off)")->capture_default_str();
+  sub->add_option("--lifting-range", args->lifting_range, "object lifting: search interval (m)")->capture_default_str();
+  sub->add_option("--roi", args->roi, "region of interest: xmin ymin zmin xmax ymax zmax (global)")->expected(6);
+  sub->add_flag("--colour", args->colour, "one grey value per channel (geometry shared)");
+  sub->add_option("--threads", args->threads, "threads (0 = all cores)")->capture_default_str();
+  sub->add_flag("--no-glb", args->no_glb, "do not write surface.glb");
+  sub->add_flag("--no-vrml", args->no_vrml, "do not write surface.wrl");
+  sub->add_flag("--no-rasters", args->no_rasters, "do not write ortho.tif, dsm.tif, sigma.tif");
+  sub->callback([args] {
+    try {
+      RunReconstruct(*args);
+    } catch (const std::exception& e) {
+      std::cerr << "facets reconstruct: error: " << e.what() << "\n";
+      throw CLI::RuntimeError(1);
+    }
+  });
+}
+
+}  // namespace facets

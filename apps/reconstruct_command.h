@@ -1,0 +1,16 @@
+// `facets reconstruct --colmap SPARSE_DIR --images IMAGE_DIR --out OUT_DIR [options]`
+// `facets reconstruct --project FILE --out OUT_DIR [options]`
+// Reconstructs the surface and writes into OUT_DIR (engine/products.h): surface.ply,
+// surface.glb, surface.wrl (tessellated surface with the object grey values, per-node
+// sigma and views), tin.ply, ortho.tif, dsm.tif, sigma.tif, report.json, facets.log. Options can also
+// come from a config file (--config FILE, `key = value` lines); flags override it.
+// Exit status 0 only when the products were written.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace facets {
+
+void AddReconstructCommand(CLI::App& app);
+
+}  // namespace facets

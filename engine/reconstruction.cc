@@ -1,0 +1,315 @@
+#include "engine/reconstruction.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <stdexcept>
+
+#include "mesh/creases.h"
+#include "mesh/local_ops.h"
+#include "mesh/subdivision.h"
+
+namespace facets {
+namespace {
+
+double Seconds(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+double Percentile(std::vector<double> v, double q) {
+  std::sort(v.begin(), v.end());
+  return v[static_cast<size_t>(std::clamp(q, 0.0, 1.0) * (v.size() - 1))];
+}
+
+RegionOfInterest ChooseRoi(const ImageBlock& block, const ReconstructionOptions& options) {
+  if (options.roi) return *options.roi;
+  if (block.roi) return *block.roi;
+  if (block.points.size() >= 10) {
+    // The bulk of the tie points: 2nd to 98th percentile, robust to a few blunders.
+    std::vector<double> x, y, z;
+    for (const auto& p : block.points) {
+      x.push_back(p.xyz.x());
+      y.push_back(p.xyz.y());
+      z.push_back(p.xyz.z());
+    }
+    RegionOfInterest roi;
+    roi.min = Eigen::Vector3d(Percentile(x, 0.02), Percentile(y, 0.02), Percentile(z, 0.02));
+    roi.max = Eigen::Vector3d(Percentile(x, 0.98), Percentile(y, 0.98), Percentile(z, 0.98));
+    return roi;
+  }
+  throw std::runtime_error(
+      "no region of interest: the block has none, none was given, and there are fewer "
+      "than 10 tie points to derive one from");
+}
+
+double ChooseStartHeight(const ImageBlock& block, const RegionOfInterest& roi,
+                         const ReconstructionOptions& options) {
+  if (options.start_height) return *options.start_height;
+  if (block.mean_height) return *block.mean_height;
+  std::vector<double> z;
+  for (const auto& p : block.points) {
+    if (p.xyz.x() >= roi.min.x() && p.xyz.x() <= roi.max.x() && p.xyz.y() >= roi.min.y() &&
+        p.xyz.y() <= roi.max.y()) {
+      z.push_back(p.xyz.z());
+    }
+  }
+  if (!z.empty()) return Median(z);
+  throw std::runtime_error(
+      "no start height: give one, or a mean terrain height in the project, or tie points");
+}
+
+// Mean ground pixel size of the original images at the ROI centre.
+double GroundPixel(const ImageBlock& block, const Eigen::Vector3d& centre) {
+  std::vector<double> gsd;
+  for (const auto& image : block.images) {
+    const Camera& camera = block.CameraOf(image);
+    const double focal = 0.5 * (camera.FocalX() + camera.FocalY());
+    gsd.push_back((centre - image.ProjectionCentre()).norm() / focal);
+  }
+  return Median(gsd);
+}
+
+TinMesh StartPlane(const RegionOfInterest& roi, double height, double spacing) {
+  StartGridOptions grid;
+  grid.min = roi.min.head<2>();
+  grid.max = roi.max.head<2>();
+  grid.spacing = spacing;
+  grid.plane_height = height;
+  return MakeStartGrid(grid);
+}
+
+}  // namespace
+
+void ReconstructionOptions::Check() const {
+  auto fail = [](const std::string& what) {
+    throw std::invalid_argument("reconstruction options: " + what);
+  };
+  if (levels < 1 || levels > 10) fail("levels must lie in 1..10");
+  if (!(facet_pixels > 0.5)) fail("facet_pixels must be > 0.5");
+  if (lifting_steps < 0) fail("lifting_steps must be >= 0");
+  if (lifting_steps > 0 && !(lifting_range > 0)) fail("lifting_range must be > 0");
+  if (roi && !(roi->max.array() > roi->min.array()).head<2>().all()) {
+    fail("region of interest is empty");
+  }
+  adjustment.Check();
+}
+
+std::string ReconstructionReport::BriefReport() const {
+  std::ostringstream out;
+  out << "start height " << start_height << " m; ";
+  for (const auto& level : levels) {
+    out << "level " << level.level << ": " << level.faces << " faces, "
+        << level.window.iterations.size() << " iterations, sigma0 " << level.window.sigma0
+        << "; ";
+  }
+  out << seconds_total << " s";
+  return out.str();
+}
+
+std::string ReconstructionReport::Json() const {
+  using nlohmann::json;
+  json j;
+  j["start_height"] = start_height;
+  j["seconds_total"] = seconds_total;
+  j["seconds_images"] = seconds_images;
+  for (const auto& t : lifting) {
+    j["object_lifting"].push_back({{"height", t.height}, {"sigma0", t.sigma0},
+                                   {"mean_dn", t.mean_dn}, {"observations", t.observations}});
+  }
+  long long observations = 0;
+  int iterations = 0, cg = 0;
+  for (const auto& level : levels) {
+    json l;
+    l["level"] = level.level;
+    l["ground_pixel"] = level.ground_pixel;
+    l["edge_length"] = level.edge_length;
+    l["vertices"] = level.vertices;
+    l["faces"] = level.faces;
+    l["seconds"] = level.seconds;
+    const WindowReport& w = level.window;
+    json window = {{"window", 0},
+                   {"converged", w.converged},
+                   {"iterations", w.iterations.size()},
+                   {"cg_iterations", w.cg_iterations_total},
+                   {"observations", w.observations},
+                   {"pseudo_observations", w.pseudo_observations},
+                   {"unknowns", w.unknowns},
+                   {"redundancy", w.redundancy},
+                   {"sigma0", w.sigma0},
+                   {"crease_edges", w.crease_edges},
+                   {"seconds", w.seconds_total},
+                   {"seconds_precision", w.seconds_precision},
+                   {"precision_computed", w.precision_computed}};
+    for (const auto& it : w.iterations) {
+      window["per_iteration"].push_back({{"iteration", it.iteration},
+                                         {"observations", it.observations},
+                                         {"cg_iterations", it.cg_iterations},
+                                         {"sigma0", it.sigma0},
+                                         {"max_dn", {it.max_dn_interior, it.max_dn_border, it.max_dn_corner}},
+                                         {"seconds", {{"cast", it.seconds_cast},
+                                                      {"linearise", it.seconds_linearise},
+                                                      {"solve", it.seconds_solve},
+                                                      {"update", it.seconds_update}}}});
+    }
+    l["windows"].push_back(window);
+    j["levels"].push_back(l);
+    observations += w.observations;
+    iterations += static_cast<int>(w.iterations.size());
+    cg += w.cg_iterations_total;
+  }
+  j["totals"] = {{"levels", levels.size()},
+                 {"iterations", iterations},
+                 {"cg_iterations", cg},
+                 {"observations_last_iterations", observations},
+                 {"sigma0_finest", levels.empty() ? 0.0 : levels.back().window.sigma0}};
+  return j.dump(2);
+}
+
+Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions& options) {
+  options.Check();
+  const auto start = std::chrono::steady_clock::now();
+  auto say = [&](const std::string& line) {
+    if (options.progress) options.progress(line);
+  };
+  if (block.images.size() < 2) throw std::runtime_error("reconstruction needs at least 2 images");
+  Reconstruction result;
+  const RegionOfInterest roi = ChooseRoi(block, options);
+  double start_height = ChooseStartHeight(block, roi, options);
+  Eigen::Vector3d centre = 0.5 * (roi.min + roi.max);
+  centre.z() = start_height;
+  const double gsd0 = GroundPixel(block, centre);
+  const int num_levels = options.levels;
+
+  // Images and their pyramids; cameras scaled level by level exactly like the images.
+  say("stage images: reading " + std::to_string(block.images.size()) + " images, " +
+      std::to_string(num_levels) + " pyramid levels");
+  const auto images_start = std::chrono::steady_clock::now();
+  std::vector<std::vector<ImagePlanes>> pyramids(block.images.size());
+  std::vector<std::vector<Camera>> cameras(block.images.size());
+  tbb::parallel_for(size_t{0}, block.images.size(), [&](size_t k) {
+    ImagePlanes planes = ReadImageFor(block.images[k].path, block.CameraOf(block.images[k]));
+    if (!options.colour) planes = planes.Grey();
+    pyramids[k] = BuildPyramid(planes, num_levels, options.filter);
+    cameras[k].push_back(block.CameraOf(block.images[k]));
+    for (int l = 1; l < num_levels; ++l) cameras[k].push_back(cameras[k].back().Scaled(0.5));
+  });
+  result.report.seconds_images = Seconds(images_start);
+  result.channels = pyramids.front().front().channels;
+  auto level_images = [&](int level) {
+    std::vector<LevelImage> images;
+    for (size_t k = 0; k < block.images.size(); ++k) {
+      images.push_back({block.images[k].image_id, &cameras[k][level],
+                        block.images[k].cam_from_world, &pyramids[k][level]});
+    }
+    return images;
+  };
+  auto edge_length = [&](int level) {
+    return kSubdivisions * options.facet_pixels * gsd0 * std::pow(2.0, level);
+  };
+  auto level_options = [&](int level) {
+    AdjustmentOptions adjustment = options.adjustment;
+    adjustment.break_off *= std::pow(2.0, level);
+    if (adjustment.max_step == 0.0) adjustment.max_step = 0.5 * edge_length(level);
+    adjustment.compute_precision = options.adjustment.compute_precision && level == 0;
+    return adjustment;
+  };
+
+  // Object lifting on the coarsest level (seed 001).
+  const int coarsest = num_levels - 1;
+  if (options.lifting_steps > 0) {
+    say("stage object lifting: " + std::to_string(options.lifting_steps) + " start heights over " +
+        std::to_string(options.lifting_range) + " m");
+    double best_sigma = 1e300;
+    double best_height = start_height;
+    for (int s = 0; s < options.lifting_steps; ++s) {
+      const double height =
+          start_height - 0.5 * options.lifting_range +
+          options.lifting_range * (options.lifting_steps == 1 ? 0.5 : s / (options.lifting_steps - 1.0));
+      TinMesh mesh = StartPlane(roi, height, edge_length(coarsest));
+      AdjustmentOptions one = level_options(coarsest);
+      one.max_iterations = 1;
+      one.compute_precision = false;
+      LiftingTrial trial;
+      trial.height = height;
+      try {
+        WindowAdjustment adjustment(&mesh, level_images(coarsest), one);
+        const WindowReport report = adjustment.Run();
+        double sum = 0.0;
+        for (auto vh : mesh.vertices()) sum += mesh.point(vh)[2] - height;
+        trial.sigma0 = report.sigma0;
+        trial.mean_dn = sum / mesh.n_vertices();
+        trial.observations = report.observations;
+      } catch (const std::runtime_error&) {
+        trial.sigma0 = 1e300;  // no image sees this height: not a candidate
+      }
+      result.report.lifting.push_back(trial);
+      say("  lifting height " + std::to_string(height) + " m: sigma0 " + std::to_string(trial.sigma0) +
+          ", mean displacement " + std::to_string(trial.mean_dn) + " m");
+      if (trial.sigma0 < best_sigma) {
+        best_sigma = trial.sigma0;
+        best_height = height + trial.mean_dn;
+      }
+    }
+    start_height = best_height;
+  }
+  result.report.start_height = start_height;
+
+  TinMesh mesh = StartPlane(roi, start_height, edge_length(coarsest));
+  for (int level = coarsest; level >= 0; --level) {
+    const auto level_start = std::chrono::steady_clock::now();
+    if (level != coarsest) {
+      // One pyramid level down: quaternary subdivision keeps the shape (creases
+      // included), the quality pass splits what walls stretched.
+      // (Tangential smoothing is left out for now: it re-projects onto the plain G1
+      // surface and would round the creases again.)
+      mesh = QuaternarySubdivide(
+          mesh, ComputeCornerNormals(mesh, options.adjustment.crease_angle_deg));
+      QualityOptions quality;
+      quality.target_edge_length = edge_length(level);
+      QualityPass(&mesh, quality);
+      UpdateVertexNormals(&mesh);
+    }
+    LevelReport level_report;
+    level_report.level = level;
+    level_report.ground_pixel = gsd0 * std::pow(2.0, level);
+    level_report.edge_length = edge_length(level);
+    level_report.vertices = static_cast<int>(mesh.n_vertices());
+    level_report.faces = static_cast<int>(mesh.n_faces());
+    say("stage adjust: level " + std::to_string(level) + " (" + std::to_string(coarsest - level + 1) +
+        "/" + std::to_string(num_levels) + "), window 1/1, " + std::to_string(mesh.n_faces()) +
+        " faces, ground pixel " + std::to_string(level_report.ground_pixel) + " m");
+    WindowAdjustment adjustment(&mesh, level_images(level), level_options(level));
+    level_report.window = adjustment.Run();
+    for (const auto& it : level_report.window.iterations) {
+      say("  level " + std::to_string(level) + " iteration " + std::to_string(it.iteration) +
+          ": sigma0 " + std::to_string(it.sigma0) + ", max dn " + std::to_string(it.max_dn_interior) +
+          " m, " + std::to_string(it.observations) + " observations, " +
+          std::to_string(it.cg_iterations) + " CG iterations");
+    }
+    level_report.seconds = Seconds(level_start);
+    if (level == 0) {
+      result.tessellation = adjustment.tessellation();
+      result.grey = adjustment.grey();
+      result.vertex_sigma = level_report.window.vertex_sigma;
+      result.vertex_views = level_report.window.vertex_views;
+      result.vertex_flags = level_report.window.vertex_flags;
+    }
+    result.report.levels.push_back(std::move(level_report));
+  }
+  result.mesh = std::move(mesh);
+  result.report.seconds_total = Seconds(start);
+  say("done: " + result.report.BriefReport());
+  return result;
+}
+
+}  // namespace facets

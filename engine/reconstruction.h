@@ -1,0 +1,95 @@
+// The reconstruction driver (DESIGN.md sections 2 and 5): image pyramid, start
+// surface, object lifting on the coarsest level, then per level coarse to fine the
+// window adjustment and the refinement of the TIN (quaternary subdivision, quality
+// pass, tangential smoothing) one pyramid level down.
+//
+// This first version adjusts each level as one window (DESIGN.md's octree of
+// overlapping windows processed in parallel is still to come), and holds every
+// image of every level in memory.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/adjustment_options.h"
+#include "engine/pyramid.h"
+#include "engine/window_adjustment.h"
+#include "io/image_block.h"
+#include "mesh/tessellation.h"
+#include "mesh/tin.h"
+
+namespace facets {
+
+struct ReconstructionOptions {
+  // Pyramid levels: 1 = the original images only.
+  int levels = 3;
+  PyramidFilter filter = PyramidFilter::kBinomial5;
+  // Options of every window adjustment; break_off is the finest level's bound and is
+  // doubled per coarser level.
+  AdjustmentOptions adjustment;
+  // Edge of a grey facet in pixels of the level's images (the seeds: about 2).
+  double facet_pixels = 2.0;
+  // Use all channels (colour: one grey value per channel, geometry shared) or their mean.
+  bool colour = false;
+  // Start surface: a plane at this height (local Z); default: the block's mean terrain
+  // height, else the median height of the tie points.
+  std::optional<double> start_height;
+  // Object lifting on the coarsest level (seed 001): try start heights over
+  // +- lifting_range / 2 around the start height in lifting_steps steps, one iteration
+  // each, and start from the best. 0 steps = off.
+  int lifting_steps = 0;
+  double lifting_range = 30.0;
+  // Region of interest (local); default: the block's, else the tie points' extent.
+  std::optional<RegionOfInterest> roi;
+  // Called with one line of progress at a time (stage, level, iteration, sigma0).
+  std::function<void(const std::string&)> progress;
+
+  void Check() const;  // throws std::invalid_argument naming the option
+};
+
+struct LiftingTrial {
+  double height = 0.0;
+  double sigma0 = 0.0;
+  double mean_dn = 0.0;
+  long long observations = 0;
+};
+
+struct LevelReport {
+  int level = 0;               // 0 = finest
+  double ground_pixel = 0.0;   // mean ground pixel size of the level's images (m)
+  double edge_length = 0.0;    // target TIN edge length (m)
+  int vertices = 0;
+  int faces = 0;
+  WindowReport window;
+  double seconds = 0.0;
+};
+
+struct ReconstructionReport {
+  std::vector<LiftingTrial> lifting;
+  double start_height = 0.0;
+  std::vector<LevelReport> levels;  // in processing order, coarsest first
+  double seconds_total = 0.0;
+  double seconds_images = 0.0;
+  std::string Json() const;
+  std::string BriefReport() const;
+};
+
+struct Reconstruction {
+  TinMesh mesh;
+  Tessellation tessellation;
+  int channels = 1;
+  std::vector<double> grey;  // per tessellation node and channel
+  ReconstructionReport report;
+  // Of the finest level, per TIN vertex.
+  std::vector<double> vertex_sigma;
+  std::vector<int> vertex_views;
+  std::vector<uint8_t> vertex_flags;
+};
+
+// Throws std::runtime_error with a clear message on unusable input (no ROI and no tie
+// points, images that do not see the region, unreadable images).
+Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions& options);
+
+}  // namespace facets

@@ -1,0 +1,44 @@
+// End-to-end: the reconstruction driver (pyramid, multigrid, start from the tie points)
+// on the seed gable-roof pair, scored by the evaluation against the truth.
+#include <gtest/gtest.h>
+
+#include <iostream>
+
+#include "engine/reconstruction.h"
+#include "io/colmap_io.h"
+#include "scenes/evaluate.h"
+#include "scenes/renderer.h"
+#include "scenes/scene.h"
+
+namespace facets {
+namespace {
+
+TEST(Reconstruct, SeedGableRoofFromTiePointsWithPyramid) {
+  const Scene scene = LoadScene(std::string(FACETS_SOURCE_DIR) + "/scenes/data/seed_gable_parallel.json");
+  const std::string dir = testing::TempDir() + "/facets_reconstruct_seed_gable";
+  RenderScene(scene, dir);
+  ImageBlock block = ReadColmapModel(dir + "/sparse", dir + "/images");
+  block.roi = scene.roi;  // the 24 m x 24 m window; start height from the tie points
+
+  ReconstructionOptions options;
+  options.levels = 3;
+  options.progress = [](const std::string& line) { std::cout << line << "\n"; };
+  const Reconstruction r = Reconstruct(block, options);
+  ASSERT_EQ(r.report.levels.size(), 3u);
+  const WindowReport& finest = r.report.levels.back().window;
+  EXPECT_TRUE(finest.converged);
+  EXPECT_LT(finest.sigma0, 6.0);
+
+  MeshData surface;
+  surface.vertices = r.tessellation.points;
+  surface.faces = r.tessellation.triangles;
+  const EvaluationReport score = Evaluate(ReadTruthScene(dir), surface);
+  const RegionScore* roof = score.Region("roof");
+  ASSERT_NE(roof, nullptr);
+  std::cout << score.Table();
+  EXPECT_LT(roof->accuracy.median, 0.05);
+  EXPECT_GT(roof->completeness.within[1], 0.85);  // within 1 ground pixel
+}
+
+}  // namespace
+}  // namespace facets
