@@ -6,4 +6,6 @@ bash scripts/install-deps.sh
 bash scripts/build.sh -DFACETS_WERROR=ON
 jobs=$(nproc 2>/dev/null || echo 2)
 cd build
-ctest --output-on-failure -j"$jobs" --timeout 900
+# The log lets .ci/run repeat the count as its closing line.
+ctest --output-on-failure -j"$jobs" --timeout 900 2>&1 | tee ctest.log
+exit "${PIPESTATUS[0]}"

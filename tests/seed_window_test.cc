@@ -39,6 +39,9 @@ struct SeedRun {
   double noise = 4.0;
   double shift = 0.3;
   AdjustmentOptions options;
+  // Non-empty: turn each grey image into one channel per gain (colour / multispectral
+  // images: one grey value per channel and node, geometry shared).
+  std::vector<double> channel_gains;
   // Constant-albedo patch (XY rectangle, min/max), to split the statistics.
   std::optional<Eigen::AlignedBox2d> patch;
 };
@@ -54,6 +57,16 @@ SeedResult RunSeedWindow(const SeedRun& run) {
   const ImageBlock block = ReadColmapModel(dir + "/sparse", dir + "/images");
   LoadedImages loaded;
   LoadLevelImages(block, /*grey=*/true, &loaded);
+  if (!run.channel_gains.empty()) {
+    for (ImagePlanes& planes : loaded.planes) {
+      ImagePlanes multi = planes;
+      multi.channels = static_cast<int>(run.channel_gains.size());
+      multi.data.clear();
+      for (double gain : run.channel_gains)
+        for (float g : planes.data) multi.data.push_back(static_cast<float>(gain * g));
+      planes = std::move(multi);
+    }
+  }
   const std::vector<LevelImage>& images = loaded.images;
 
   const TruthMesh truth = BuildTruthMesh(scene);
@@ -158,6 +171,18 @@ TEST(SeedWindow, GableRoofWithoutNoise) {
   const SeedResult r = RunSeedWindow(run);
   EXPECT_TRUE(r.report.converged);
   EXPECT_LE(r.rms, 0.015);
+}
+
+// Three channels with different gains: one grey value per channel, geometry shared.
+TEST(SeedWindow, MultiChannelImagesShareTheGeometry) {
+  SeedRun run;
+  run.channel_gains = {1.0, 0.8, 0.6};
+  run.options.break_off = 0.005;
+  const SeedResult r = RunSeedWindow(run);
+  EXPECT_TRUE(r.report.converged);
+  EXPECT_LE(r.rms, 0.06);
+  EXPECT_GT(r.report.sigma0, 2.0);  // noise 4 scaled by gains 0.6-1.0
+  EXPECT_LT(r.report.sigma0, 4.4);
 }
 
 // Solvers on real normal equations of a window: SSOR-PCG agrees with the sparse
