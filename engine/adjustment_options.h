@@ -58,7 +58,7 @@ struct AdjustmentOptions {
   // Edges whose two face normals differ by more than this are creases (ridges,
   // eaves, wall edges): the surface stays continuous but not smooth across them
   // (mesh/creases.h). 180 = a G1 surface everywhere.
-  double crease_angle_deg = 30.0;
+  double crease_angle_deg = 20.0;
 
   // Rays at |cos incidence| below this are no observation.
   double min_cos_incidence = 0.1;

@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <memory>
 #include <chrono>
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -288,8 +289,26 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     say("stage adjust: level " + std::to_string(level) + " (" + std::to_string(coarsest - level + 1) +
         "/" + std::to_string(num_levels) + "), window 1/1, " + std::to_string(mesh.n_faces()) +
         " faces, ground pixel " + std::to_string(level_report.ground_pixel) + " m");
-    WindowAdjustment adjustment(&mesh, level_images(level), level_options(level));
-    level_report.window = adjustment.Run();
+    auto adjustment = std::make_unique<WindowAdjustment>(&mesh, level_images(level), level_options(level));
+    level_report.window = adjustment->Run();
+    // Creases that the adjustment itself sharpened (a ridge grows out of a plane start)
+    // were not known when the level started, and a window keeps its crease set: one
+    // more pass with the new set, starting from the adjusted surface.
+    const std::vector<bool> creases = DetectCreaseEdges(mesh, options.adjustment.crease_angle_deg);
+    const int found = static_cast<int>(std::count(creases.begin(), creases.end(), true));
+    if (found > level_report.window.crease_edges) {
+      say("  level " + std::to_string(level) + ": " + std::to_string(found) +
+          " crease edges after the adjustment (" + std::to_string(level_report.window.crease_edges) +
+          " before): one more pass");
+      const int first_iterations = static_cast<int>(level_report.window.iterations.size());
+      adjustment = std::make_unique<WindowAdjustment>(&mesh, level_images(level), level_options(level));
+      WindowReport second = adjustment->Run();
+      for (auto& it : second.iterations) it.iteration += first_iterations;
+      second.iterations.insert(second.iterations.begin(), level_report.window.iterations.begin(),
+                               level_report.window.iterations.end());
+      second.cg_iterations_total += level_report.window.cg_iterations_total;
+      level_report.window = std::move(second);
+    }
     for (const auto& it : level_report.window.iterations) {
       say("  level " + std::to_string(level) + " iteration " + std::to_string(it.iteration) +
           ": sigma0 " + std::to_string(it.sigma0) + ", max dn " + std::to_string(it.max_dn_interior) +
@@ -298,8 +317,8 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     }
     level_report.seconds = Seconds(level_start);
     if (level == 0) {
-      result.tessellation = adjustment.tessellation();
-      result.grey = adjustment.grey();
+      result.tessellation = adjustment->tessellation();
+      result.grey = adjustment->grey();
       result.vertex_sigma = level_report.window.vertex_sigma;
       result.vertex_views = level_report.window.vertex_views;
       result.vertex_flags = level_report.window.vertex_flags;
