@@ -468,7 +468,54 @@ EvaluationReport Evaluate(const TruthScene& truth, const MeshData& reconstructio
   all.multi_view = ComputeCompleteness(multi_all, thresholds_m);
   all.few_views = ComputeCompleteness(few_all, thresholds_m);
   report.regions.push_back(all);
+  if (options.height_grid_gsd > 0.0 && report.roi) {
+    report.heights = EvaluateHeights(truth.mesh, reconstruction, *report.roi,
+                                     options.height_grid_gsd * gsd, options.height_border_gsd * gsd);
+  }
   return report;
+}
+
+HeightErrors EvaluateHeights(const MeshData& truth, const MeshData& reconstruction,
+                             const RegionOfInterest& roi, double spacing, double border) {
+  HeightErrors h;
+  h.spacing = spacing;
+  const TriangleScene truth_scene(EmbreeDevice::Shared(), truth.vertices, truth.faces);
+  const TriangleScene rec_scene(EmbreeDevice::Shared(), reconstruction.vertices, reconstruction.faces);
+  // Rays start above everything: the highest point wins, as in a DSM.
+  double top = roi.max.z();
+  for (const auto& v : truth.vertices) top = std::max(top, v.z());
+  for (const auto& v : reconstruction.vertices) top = std::max(top, v.z());
+  top += 10.0;
+  const Eigen::Vector3d down(0, 0, -1);
+  double sum = 0, sum2 = 0;
+  h.min = 1e300;
+  h.max = -1e300;
+  for (double y = roi.min.y() + border; y <= roi.max.y() - border + 1e-9; y += spacing) {
+    for (double x = roi.min.x() + border; x <= roi.max.x() - border + 1e-9; x += spacing) {
+      const Eigen::Vector3d origin(x, y, top);
+      const RayHit t = truth_scene.Intersect(origin, down);
+      if (!t.hit) continue;
+      const RayHit r = rec_scene.Intersect(origin, down);
+      if (!r.hit) {
+        ++h.missing;
+        continue;
+      }
+      // Embree's float distances are exact enough for centimetres at tens of metres.
+      const double dz = static_cast<double>(t.distance) - static_cast<double>(r.distance);
+      sum += dz;
+      sum2 += dz * dz;
+      h.min = std::min(h.min, dz);
+      h.max = std::max(h.max, dz);
+      ++h.count;
+    }
+  }
+  if (h.count > 0) {
+    h.mean = sum / h.count;
+    h.rms = std::sqrt(sum2 / h.count);
+  } else {
+    h.min = h.max = 0;
+  }
+  return h;
 }
 
 EvaluationReport EvaluateFiles(const std::string& truth_dir, const std::string& mesh_path,
@@ -548,6 +595,14 @@ std::string EvaluationReport::Table() const {
     out << "\n";
   };
   for (const RegionScore& r : regions) row(r.name, r.completeness);
+  if (heights.count > 0) {
+    std::snprintf(line, sizeof(line),
+                  "\nHeight errors (reconstruction - truth, highest points, %.2f m grid)\n"
+                  "  points %zu (missing %zu)  rms %.4f  mean %.4f  min %.4f  max %.4f  m\n",
+                  heights.spacing, heights.count, heights.missing, heights.rms, heights.mean,
+                  heights.min, heights.max);
+    out << line;
+  }
   out << "  by view count\n";
   for (const RegionScore& r : regions) {
     if (r.label == -1) continue;
@@ -585,6 +640,10 @@ std::string EvaluationReport::Json(bool with_samples) const {
                              CompletenessJson(r.few_views, thresholds_gsd)}});
   }
   j["regions"] = regions_json;
+  j["height_errors"] = {{"count", heights.count}, {"missing", heights.missing},
+                        {"rms", heights.rms},     {"mean", heights.mean},
+                        {"min", heights.min},     {"max", heights.max},
+                        {"spacing", heights.spacing}};
   if (with_samples) {
     nlohmann::json s = nlohmann::json::array();
     for (const TruthSample& t : truth_samples) {

@@ -64,6 +64,12 @@ struct EvaluationOptions {
   std::vector<double> completeness_thresholds_gsd = {0.5, 1.0, 2.0};
   // Region of interest overriding the truth's (local coordinates).
   std::optional<RegionOfInterest> roi;
+  // Height errors (the seeds' "rms of true height errors"): vertical differences
+  // between the highest points of reconstruction and truth on a regular XY grid of
+  // this spacing (GSD) inside the ROI shrunk by height_border_gsd (the seeds leave out
+  // the window border). 0 = off.
+  double height_grid_gsd = 2.0;
+  double height_border_gsd = 8.0;
 
   // Throws std::invalid_argument naming the offending option.
   void Check() const;
@@ -96,8 +102,17 @@ struct TruthSample {
   double distance = 0.0;  // to the reconstruction, m (computed for every sample)
 };
 
+// Vertical differences reconstruction - truth at grid points where both exist.
+struct HeightErrors {
+  size_t count = 0;
+  size_t missing = 0;  // grid points where the reconstruction has no surface
+  double rms = 0, mean = 0, min = 0, max = 0;  // metres
+  double spacing = 0;  // m
+};
+
 struct EvaluationReport {
   double ground_pixel_size = 0.0;  // m
+  HeightErrors heights;
   double sample_spacing = 0.0;     // m, reconstruction samples
   double truth_sample_spacing = 0.0;
   std::vector<double> thresholds_gsd;
@@ -121,6 +136,9 @@ struct EvaluationReport {
 
 EvaluationReport Evaluate(const TruthScene& truth, const MeshData& reconstruction,
                           const EvaluationOptions& options = {});
+// Height errors alone (see EvaluationOptions::height_grid_gsd).
+HeightErrors EvaluateHeights(const MeshData& truth, const MeshData& reconstruction,
+                             const RegionOfInterest& roi, double spacing, double border);
 // ReadTruthScene(truth_dir) + ReadMesh(mesh_path) + Evaluate.
 EvaluationReport EvaluateFiles(const std::string& truth_dir, const std::string& mesh_path,
                                const EvaluationOptions& options = {});
