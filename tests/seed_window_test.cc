@@ -48,8 +48,10 @@ struct SeedRun {
 
 SeedResult RunSeedWindow(const SeedRun& run) {
   const Scene scene = LoadScene(run.scene_file[0] == '/' ? run.scene_file : std::string(FACETS_SOURCE_DIR) + "/scenes/data/" + run.scene_file);
-  const std::string dir = testing::TempDir() + "/facets_" + scene.name + "_" +
-                          std::to_string(static_cast<int>(run.noise * 10));
+  // One folder per test: ctest runs tests in parallel, and rendering replaces the folder.
+  const std::string dir = testing::TempDir() + "/facets_" +
+                          testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
+                          scene.name + "_" + std::to_string(static_cast<int>(run.noise * 10));
   RenderOptions render_options;
   render_options.noise_sigma = run.noise;
   RenderScene(scene, dir, render_options);
