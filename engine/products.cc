@@ -51,7 +51,16 @@ std::vector<int> NodeViews(const Reconstruction& r) {
   return views;
 }
 
-ExportSurface MakeExportSurface(const Reconstruction& r, const ImageBlock& block) {
+namespace {
+
+// Node values shared by the surface products, computed once.
+struct NodeAttributes {
+  std::vector<double> sigma;
+  std::vector<int> views;
+};
+
+ExportSurface MakeExportSurface(const Reconstruction& r, const ImageBlock& block,
+                                const NodeAttributes& nodes) {
   ExportSurface surface;
   surface.vertices = r.tessellation.points;
   surface.triangles = r.tessellation.triangles;
@@ -61,14 +70,14 @@ ExportSurface MakeExportSurface(const Reconstruction& r, const ImageBlock& block
       surface.colors.push_back(static_cast<float>(std::clamp(r.grey[p * r.channels + c], 0.0, 255.0)));
     }
   }
-  for (double s : NodeSigma(r)) surface.sigma.push_back(static_cast<float>(s));
-  surface.views = NodeViews(r);
+  for (double s : nodes.sigma) surface.sigma.push_back(static_cast<float>(s));
+  surface.views = nodes.views;
   surface.origin = block.origin;
   surface.crs = block.crs;
   return surface;
 }
 
-MeshData SurfaceMeshData(const Reconstruction& r) {
+MeshData SurfaceMeshData(const Reconstruction& r, const NodeAttributes& nodes) {
   MeshData mesh;
   mesh.vertices = r.tessellation.points;
   mesh.faces = r.tessellation.triangles;
@@ -79,9 +88,19 @@ MeshData SurfaceMeshData(const Reconstruction& r) {
     }
     mesh.colors.push_back(colour);
   }
-  for (double s : NodeSigma(r)) mesh.sigma.push_back(static_cast<float>(s));
-  mesh.views = NodeViews(r);
+  for (double s : nodes.sigma) mesh.sigma.push_back(static_cast<float>(s));
+  mesh.views = nodes.views;
   return mesh;
+}
+
+}  // namespace
+
+ExportSurface MakeExportSurface(const Reconstruction& r, const ImageBlock& block) {
+  return MakeExportSurface(r, block, NodeAttributes{NodeSigma(r), NodeViews(r)});
+}
+
+MeshData SurfaceMeshData(const Reconstruction& r) {
+  return SurfaceMeshData(r, NodeAttributes{NodeSigma(r), NodeViews(r)});
 }
 
 MeshData TinMeshData(const Reconstruction& r) {
@@ -106,10 +125,11 @@ std::vector<std::string> WriteProducts(const Reconstruction& r, const ImageBlock
     written.push_back(name);
     return (out / name).string();
   };
-  WritePly(path("surface.ply"), SurfaceMeshData(r));
+  const NodeAttributes nodes{NodeSigma(r), NodeViews(r)};
+  WritePly(path("surface.ply"), SurfaceMeshData(r, nodes));
   WritePly(path("tin.ply"), TinMeshData(r));
   if (options.glb || options.vrml) {
-    const ExportSurface surface = MakeExportSurface(r, block);
+    const ExportSurface surface = MakeExportSurface(r, block, nodes);
     if (options.glb) WriteGlb(path("surface.glb"), surface);
     if (options.vrml) WriteVrml(path("surface.wrl"), surface);
   }
@@ -127,7 +147,7 @@ std::vector<std::string> WriteProducts(const Reconstruction& r, const ImageBlock
     geo.crs = block.crs;
     WriteGeoTiff(path("dsm.tif"), MakeDsm(top), geo);
     WriteGeoTiff(path("ortho.tif"), MakeOrthophoto(top, r.tessellation, r.grey, r.channels), geo);
-    WriteGeoTiff(path("sigma.tif"), MakeSigmaRaster(top, r.tessellation, NodeSigma(r)), geo);
+    WriteGeoTiff(path("sigma.tif"), MakeSigmaRaster(top, r.tessellation, nodes.sigma), geo);
   }
   WriteFileAtomically(path("report.json"), r.report.Json() + "\n");
   return written;

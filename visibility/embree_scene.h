@@ -9,6 +9,7 @@
 #include <embree3/rtcore.h>
 
 #include <Eigen/Core>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -33,6 +34,35 @@ class EmbreeDevice {
  private:
   RTCDevice device_ = nullptr;
 };
+
+// Sets ray i of a 16-wide packet (float, as Embree wants) and clears its hit.
+inline void SetPacketRay(RTCRayHit16* packet, int i, const Eigen::Vector3d& origin,
+                         const Eigen::Vector3d& direction,
+                         float t_far = std::numeric_limits<float>::infinity()) {
+  packet->ray.org_x[i] = static_cast<float>(origin.x());
+  packet->ray.org_y[i] = static_cast<float>(origin.y());
+  packet->ray.org_z[i] = static_cast<float>(origin.z());
+  packet->ray.dir_x[i] = static_cast<float>(direction.x());
+  packet->ray.dir_y[i] = static_cast<float>(direction.y());
+  packet->ray.dir_z[i] = static_cast<float>(direction.z());
+  packet->ray.tnear[i] = 0.0f;
+  packet->ray.tfar[i] = t_far;
+  packet->ray.time[i] = 0.0f;
+  packet->ray.mask[i] = std::numeric_limits<unsigned>::max();
+  packet->ray.id[i] = static_cast<unsigned>(i);
+  packet->ray.flags[i] = 0;
+  packet->hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+  packet->hit.primID[i] = RTC_INVALID_GEOMETRY_ID;
+  packet->hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+}
+
+// First hits of a packet of coherent rays (neighbouring pixels, parallel rays).
+inline void IntersectCoherent16(const int* valid, RTCScene scene, RTCRayHit16* packet) {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  rtcIntersect16(valid, scene, &context, packet);
+}
 
 // First hit of one ray. prim_id is the triangle index in the scene's index buffer;
 // (u, v) are Embree's barycentrics: point = (1-u-v) V0 + u V1 + v V2.

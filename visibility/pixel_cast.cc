@@ -53,27 +53,11 @@ int CastPacket(RTCScene scene, const PixelRays& rays, const int* xs, const int* 
   const Eigen::Vector3d& origin = rays.origin();
   for (int i = 0; i < kPacket; ++i) {
     valid[i] = i < n ? -1 : 0;
-    packet.ray.org_x[i] = static_cast<float>(origin.x());
-    packet.ray.org_y[i] = static_cast<float>(origin.y());
-    packet.ray.org_z[i] = static_cast<float>(origin.z());
     Eigen::Vector3d direction(0, 0, 1);
     if (i < n) direction = rays.Direction(xs[i], ys[i]);
-    packet.ray.dir_x[i] = static_cast<float>(direction.x());
-    packet.ray.dir_y[i] = static_cast<float>(direction.y());
-    packet.ray.dir_z[i] = static_cast<float>(direction.z());
-    packet.ray.tnear[i] = 0.0f;
-    packet.ray.tfar[i] = std::numeric_limits<float>::infinity();
-    packet.ray.time[i] = 0.0f;
-    packet.ray.mask[i] = std::numeric_limits<unsigned>::max();
-    packet.ray.id[i] = static_cast<unsigned>(i);
-    packet.ray.flags[i] = 0;
-    packet.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-    packet.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+    SetPacketRay(&packet, i, origin, direction);
   }
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  rtcIntersect16(valid, scene, &context, &packet);
+  IntersectCoherent16(valid, scene, &packet);
 
   const float min_cos = static_cast<float>(options.min_cos_incidence);
   int written = 0;

@@ -117,26 +117,10 @@ TopView CastTopView(const SurfaceScene& scene, const Tessellation& tessellation,
             for (int i = 0; i < kPacket; ++i) {
               valid[i] = i < count ? -1 : 0;
               const Eigen::Vector2d xy = grid.PixelCentre(col0 + std::min(i, count - 1), row);
-              packet.ray.org_x[i] = static_cast<float>(xy.x());
-              packet.ray.org_y[i] = static_cast<float>(xy.y());
-              packet.ray.org_z[i] = static_cast<float>(z_start);
-              packet.ray.dir_x[i] = 0.0f;
-              packet.ray.dir_y[i] = 0.0f;
-              packet.ray.dir_z[i] = -1.0f;
-              packet.ray.tnear[i] = 0.0f;
-              packet.ray.tfar[i] = t_far;
-              packet.ray.time[i] = 0.0f;
-              packet.ray.mask[i] = 0xFFFFFFFFu;
-              packet.ray.id[i] = static_cast<unsigned>(i);
-              packet.ray.flags[i] = 0;
-              packet.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-              packet.hit.primID[i] = RTC_INVALID_GEOMETRY_ID;
-              packet.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+              SetPacketRay(&packet, i, Eigen::Vector3d(xy.x(), xy.y(), z_start),
+                           Eigen::Vector3d(0, 0, -1), t_far);
             }
-            RTCIntersectContext context;
-            rtcInitIntersectContext(&context);
-            context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-            rtcIntersect16(valid, rtc_scene, &context, &packet);
+            IntersectCoherent16(valid, rtc_scene, &packet);
 
             for (int i = 0; i < count; ++i) {
               const int col = col0 + i;

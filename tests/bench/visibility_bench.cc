@@ -71,26 +71,10 @@ long long BareCast(const SurfaceScene& scene, const Camera& camera, const Rigid3
               valid[n] = inside ? -1 : 0;
               const Eigen::Vector3d d =
                   inside ? rays.Direction(x, y) : Eigen::Vector3d(0, 0, 1);
-              packet.ray.org_x[n] = static_cast<float>(rays.origin().x());
-              packet.ray.org_y[n] = static_cast<float>(rays.origin().y());
-              packet.ray.org_z[n] = static_cast<float>(rays.origin().z());
-              packet.ray.dir_x[n] = static_cast<float>(d.x());
-              packet.ray.dir_y[n] = static_cast<float>(d.y());
-              packet.ray.dir_z[n] = static_cast<float>(d.z());
-              packet.ray.tnear[n] = 0.0f;
-              packet.ray.tfar[n] = std::numeric_limits<float>::infinity();
-              packet.ray.time[n] = 0.0f;
-              packet.ray.mask[n] = ~0u;
-              packet.ray.id[n] = n;
-              packet.ray.flags[n] = 0;
-              packet.hit.geomID[n] = RTC_INVALID_GEOMETRY_ID;
-              packet.hit.instID[0][n] = RTC_INVALID_GEOMETRY_ID;
+              SetPacketRay(&packet, n, rays.origin(), d);
             }
           }
-          RTCIntersectContext context;
-          rtcInitIntersectContext(&context);
-          context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-          rtcIntersect16(valid, rtc_scene, &context, &packet);
+          IntersectCoherent16(valid, rtc_scene, &packet);
           for (int i = 0; i < 16; ++i) {
             local_hits += valid[i] && packet.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
           }
