@@ -39,6 +39,10 @@ struct ReconstructArgs {
   double lifting_range = 30.0;
   std::vector<double> roi;
   bool colour = false;
+  int window_faces = WindowPartitionOptions().max_faces;
+  int window_margin = WindowPartitionOptions().margin_rings;
+  int sweeps = LevelWindowOptions().sweeps;
+  bool no_occluders = false;
   int threads = 0;
   bool no_glb = false, no_vrml = false, no_rasters = false;
 };
@@ -83,6 +87,10 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.lifting_steps = args.lifting_steps;
   options.lifting_range = args.lifting_range;
   options.colour = args.colour;
+  options.windows.partition.max_faces = args.window_faces;
+  options.windows.partition.margin_rings = args.window_margin;
+  options.windows.sweeps = args.sweeps;
+  options.windows.occluders = !args.no_occluders;
   if (!args.roi.empty()) {
     if (args.roi.size() != 6) throw std::invalid_argument("--roi takes 6 numbers: xmin ymin zmin xmax ymax zmax");
     RegionOfInterest roi;
@@ -138,6 +146,10 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--lifting-range", args->lifting_range, "object lifting: search interval (m)")->capture_default_str();
   sub->add_option("--roi", args->roi, "region of interest: xmin ymin zmin xmax ymax zmax (global)")->expected(6);
   sub->add_flag("--colour", args->colour, "one grey value per channel (geometry shared)");
+  sub->add_option("--window-faces", args->window_faces, "most core triangles per window")->capture_default_str();
+  sub->add_option("--window-margin", args->window_margin, "face rings around a window's core")->capture_default_str();
+  sub->add_option("--sweeps", args->sweeps, "sweeps over the windows of a level")->capture_default_str();
+  sub->add_flag("--no-occluders", args->no_occluders, "windows do not see the surface around them");
   sub->add_option("--threads", args->threads, "threads (0 = all cores)")->capture_default_str();
   sub->add_flag("--no-glb", args->no_glb, "do not write surface.glb");
   sub->add_flag("--no-vrml", args->no_vrml, "do not write surface.wrl");

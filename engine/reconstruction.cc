@@ -103,6 +103,7 @@ void ReconstructionOptions::Check() const {
     fail("region of interest is empty");
   }
   adjustment.Check();
+  windows.Check();
 }
 
 std::string ReconstructionReport::BriefReport() const {
@@ -137,39 +138,50 @@ std::string ReconstructionReport::Json() const {
     l["vertices"] = level.vertices;
     l["faces"] = level.faces;
     l["seconds"] = level.seconds;
+    auto window_json = [](const WindowReport& w) {
+      json window = {{"converged", w.converged},
+                     {"iterations", w.iterations.size()},
+                     {"cg_iterations", w.cg_iterations_total},
+                     {"observations", w.observations},
+                     {"pseudo_observations", w.pseudo_observations},
+                     {"unknowns", w.unknowns},
+                     {"redundancy", w.redundancy},
+                     {"sigma0", w.sigma0},
+                     {"crease_edges", w.crease_edges},
+                     {"seconds", w.seconds_total},
+                     {"seconds_precision", w.seconds_precision},
+                     {"precision_computed", w.precision_computed}};
+      for (const auto& it : w.iterations) {
+        window["per_iteration"].push_back(
+            {{"iteration", it.iteration},
+             {"observations", it.observations},
+             {"cg_iterations", it.cg_iterations},
+             {"sigma0", it.sigma0},
+             {"max_dn", {it.max_dn_interior, it.max_dn_border, it.max_dn_corner}},
+             {"seconds", {{"cast", it.seconds_cast},
+                          {"linearise", it.seconds_linearise},
+                          {"solve", it.seconds_solve},
+                          {"update", it.seconds_update}}}});
+      }
+      return window;
+    };
     const WindowReport& w = level.window;
-    json window = {{"window", 0},
-                   {"converged", w.converged},
-                   {"iterations", w.iterations.size()},
-                   {"cg_iterations", w.cg_iterations_total},
-                   {"observations", w.observations},
-                   {"pseudo_observations", w.pseudo_observations},
-                   {"unknowns", w.unknowns},
-                   {"redundancy", w.redundancy},
-                   {"sigma0", w.sigma0},
-                   {"crease_edges", w.crease_edges},
-                   {"seconds", w.seconds_total},
-                   {"seconds_precision", w.seconds_precision},
-                   {"precision_computed", w.precision_computed}};
-    for (const auto& it : w.iterations) {
-      window["per_iteration"].push_back({{"iteration", it.iteration},
-                                         {"observations", it.observations},
-                                         {"cg_iterations", it.cg_iterations},
-                                         {"sigma0", it.sigma0},
-                                         {"max_dn", {it.max_dn_interior, it.max_dn_border, it.max_dn_corner}},
-                                         {"seconds", {{"cast", it.seconds_cast},
-                                                      {"linearise", it.seconds_linearise},
-                                                      {"solve", it.seconds_solve},
-                                                      {"update", it.seconds_update}}}});
+    l["summary"] = window_json(w);
+    l["summary"].erase("per_iteration");
+    l["window_groups"] = level.window_groups;
+    for (size_t k = 0; k < level.windows.size(); ++k) {
+      json window = window_json(level.windows[k]);
+      window["window"] = k;
+      if (k < level.window_core_faces.size()) window["core_faces"] = level.window_core_faces[k];
+      l["windows"].push_back(window);
     }
-    l["windows"].push_back(window);
     j["levels"].push_back(l);
     observations += w.observations;
-    iterations += static_cast<int>(w.iterations.size());
+    for (const auto& window : level.windows) iterations += static_cast<int>(window.iterations.size());
     cg += w.cg_iterations_total;
   }
   j["totals"] = {{"levels", levels.size()},
-                 {"iterations", iterations},
+                 {"window_iterations", iterations},
                  {"cg_iterations", cg},
                  {"observations_last_iterations", observations},
                  {"sigma0_finest", levels.empty() ? 0.0 : levels.back().window.sigma0}};
@@ -290,29 +302,19 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     level_report.vertices = static_cast<int>(mesh.n_vertices());
     level_report.faces = static_cast<int>(mesh.n_faces());
     say("stage adjust: level " + std::to_string(level) + " (" + std::to_string(coarsest - level + 1) +
-        "/" + std::to_string(num_levels) + "), window 1/1, " + std::to_string(mesh.n_faces()) +
+        "/" + std::to_string(num_levels) + "), " + std::to_string(mesh.n_faces()) +
         " faces, ground pixel " + std::to_string(level_report.ground_pixel) + " m");
-    auto adjustment = std::make_unique<WindowAdjustment>(&mesh, level_images(level), level_options(level));
-    level_report.window = adjustment->Run();
-    // Creases that the adjustment itself sharpened (a ridge grows out of a plane start)
-    // were not known when the level started, and a window keeps its crease set: one
-    // more pass with the new set, starting from the adjusted surface.
-    const std::vector<bool> creases = DetectCreaseEdges(mesh, options.adjustment.crease_angle_deg);
-    const int found = static_cast<int>(std::count(creases.begin(), creases.end(), true));
-    if (found > level_report.window.crease_edges) {
-      say("  level " + std::to_string(level) + ": " + std::to_string(found) +
-          " crease edges after the adjustment (" + std::to_string(level_report.window.crease_edges) +
-          " before): one more pass");
-      const int first_iterations = static_cast<int>(level_report.window.iterations.size());
-      adjustment = std::make_unique<WindowAdjustment>(&mesh, level_images(level), level_options(level));
-      WindowReport second = adjustment->Run();
-      for (auto& it : second.iterations) it.iteration += first_iterations;
-      second.iterations.insert(second.iterations.begin(), level_report.window.iterations.begin(),
-                               level_report.window.iterations.end());
-      second.cg_iterations_total += level_report.window.cg_iterations_total;
-      level_report.window = std::move(second);
-    }
-    for (const auto& it : level_report.window.iterations) {
+    LevelAdjustment adjusted = AdjustLevelInWindows(&mesh, level_images(level), level_options(level),
+                                                    options.windows, level == 0, options.progress);
+    level_report.window = std::move(adjusted.summary);
+    level_report.windows = std::move(adjusted.windows);
+    level_report.window_core_faces = std::move(adjusted.window_core_faces);
+    level_report.window_groups = adjusted.groups;
+    say("  level " + std::to_string(level) + ": " + std::to_string(level_report.windows.size()) +
+        " windows in " + std::to_string(level_report.window_groups) + " groups, sigma0 " +
+        std::to_string(level_report.window.sigma0));
+    for (const auto& it : level_report.windows.size() == 1 ? level_report.window.iterations
+                                                            : std::vector<IterationReport>{}) {
       say("  level " + std::to_string(level) + " iteration " + std::to_string(it.iteration) +
           ": sigma0 " + std::to_string(it.sigma0) + ", max dn " + std::to_string(it.max_dn_interior) +
           " m, " + std::to_string(it.observations) + " observations, " +
@@ -320,8 +322,8 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     }
     level_report.seconds = Seconds(level_start);
     if (level == 0) {
-      result.tessellation = adjustment->tessellation();
-      result.grey = adjustment->grey();
+      result.tessellation = std::move(adjusted.tessellation);
+      result.grey = std::move(adjusted.grey);
       result.vertex_sigma = level_report.window.vertex_sigma;
       result.vertex_views = level_report.window.vertex_views;
       result.vertex_flags = level_report.window.vertex_flags;

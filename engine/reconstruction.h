@@ -3,9 +3,8 @@
 // window adjustment and the refinement of the TIN (quaternary subdivision, quality
 // pass, tangential smoothing) one pyramid level down.
 //
-// This first version adjusts each level as one window (DESIGN.md's octree of
-// overlapping windows processed in parallel is still to come), and holds every
-// image of every level in memory.
+// Each level is adjusted in overlapping windows (engine/level_windows.h), windows
+// that share no vertex in parallel. Every image of every level is held in memory.
 #pragma once
 
 #include <functional>
@@ -14,6 +13,7 @@
 #include <vector>
 
 #include "engine/adjustment_options.h"
+#include "engine/level_windows.h"
 #include "engine/pyramid.h"
 #include "engine/window_adjustment.h"
 #include "io/image_block.h"
@@ -29,6 +29,8 @@ struct ReconstructionOptions {
   // Options of every window adjustment; break_off is the finest level's bound and is
   // doubled per coarser level.
   AdjustmentOptions adjustment;
+  // Window size, margin, sweeps (engine/level_windows.h).
+  LevelWindowOptions windows;
   // Edge of a grey facet in pixels of the level's images (the seeds: about 2).
   double facet_pixels = 2.0;
   // Use all channels (colour: one grey value per channel, geometry shared) or their mean.
@@ -62,7 +64,10 @@ struct LevelReport {
   double edge_length = 0.0;    // target TIN edge length (m)
   int vertices = 0;
   int faces = 0;
-  WindowReport window;
+  WindowReport window;                 // the level's summary (LevelAdjustment::summary)
+  std::vector<WindowReport> windows;   // one per window (per-vertex vectors: owned vertices)
+  std::vector<int> window_core_faces;
+  int window_groups = 0;
   double seconds = 0.0;
 };
 

@@ -100,6 +100,13 @@ void WindowAdjustment::SetFixedVertices(std::vector<bool> fixed) {
   fixed_ = std::move(fixed);
 }
 
+void WindowAdjustment::SetBreakOffVertices(std::vector<bool> judged) {
+  if (judged.size() != mesh_->n_vertices()) {
+    throw std::invalid_argument("SetBreakOffVertices: size differs from the vertex count");
+  }
+  judged_ = std::move(judged);
+}
+
 void WindowAdjustment::SetGreyValues(std::vector<double> grey) {
   grey_ = std::move(grey);
   grey_given_ = true;
@@ -418,6 +425,12 @@ double WindowAdjustment::AccumulateCurvature(Eigen::VectorXd* rhs, long long* co
   return lpl;
 }
 
+void WindowAdjustment::SetOccluders(std::vector<Eigen::Vector3d> points,
+                                    std::vector<Eigen::Vector3i> triangles) {
+  occluder_points_ = std::move(points);
+  occluder_triangles_ = std::move(triangles);
+}
+
 WindowReport WindowAdjustment::Run() {
   const auto run_start = std::chrono::steady_clock::now();
   WindowReport report;
@@ -432,6 +445,7 @@ WindowReport WindowAdjustment::Run() {
     for (auto vh : mesh_->vertices()) crease_vertex_[vh.idx()] = corners.vertex_sectors[vh.idx()] > 1;
   }
   scene_ = std::make_unique<SurfaceScene>(tess_);
+  if (!occluder_triangles_.empty()) scene_->SetOccluders(tess_, occluder_points_, occluder_triangles_);
   BuildTopologyTables();
   BuildPattern();
 
@@ -500,7 +514,9 @@ WindowReport WindowAdjustment::Run() {
       const double dn = scale * solution[vertex_unknown_[v]];
       auto vh = mesh_->vertex_handle(v);
       mesh_->set_point(vh, mesh_->point(vh) + dn * mesh_->normal(vh));
-      max_dn[vertex_class_[v]] = std::max(max_dn[vertex_class_[v]], std::abs(dn));
+      if (judged_.empty() || judged_[v]) {
+        max_dn[vertex_class_[v]] = std::max(max_dn[vertex_class_[v]], std::abs(dn));
+      }
     }
     for (size_t n = 0; n < grey_.size(); ++n) grey_[n] += solution[grey_offset_ + n];
     for (size_t k = 0; k < images_.size(); ++k) {

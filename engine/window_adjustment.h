@@ -88,9 +88,18 @@ class WindowAdjustment {
 
   // Vertices held fixed (e.g. window borders taken from neighbours); size = vertices.
   void SetFixedVertices(std::vector<bool> fixed);
+  // Vertices whose displacements decide the break-off (size = vertices); default all
+  // free ones. A window's margin is context only: its outer vertices, estimated
+  // from few rings of faces, may keep moving while the core has converged.
+  void SetBreakOffVertices(std::vector<bool> judged);
   // Grey values to start from (node-major: node * channels + c) instead of the mean
   // of the pixels that see each node.
   void SetGreyValues(std::vector<double> grey);
+
+  // The surface around the window (e.g. the rest of the level's tessellated TIN): it
+  // is no part of the window's unknowns, but a pixel whose ray hits it first sees
+  // something else and is no observation of the window.
+  void SetOccluders(std::vector<Eigen::Vector3d> points, std::vector<Eigen::Vector3i> triangles);
 
   WindowReport Run();
 
@@ -124,6 +133,9 @@ class WindowAdjustment {
   bool grey_given_ = false;
   std::vector<std::vector<std::array<double, 2>>> radiometry_;  // [image][channel]
   std::vector<bool> fixed_;
+  std::vector<bool> judged_;
+  std::vector<Eigen::Vector3d> occluder_points_;
+  std::vector<Eigen::Vector3i> occluder_triangles_;
   std::vector<bool> crease_edges_;  // by edge, fixed for one Run
   std::vector<bool> crease_vertex_;  // vertices where creases separate face sectors
   std::vector<double> curvature_target_;  // adaptive regularisation, per vertex

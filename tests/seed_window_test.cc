@@ -19,6 +19,7 @@
 #include "scenes/renderer.h"
 #include "scenes/scene.h"
 #include "scenes/truth_mesh.h"
+#include "tests/truth_start.h"
 
 namespace facets {
 namespace {
@@ -73,15 +74,9 @@ SeedResult RunSeedWindow(const SeedRun& run) {
 
   const TruthMesh truth = BuildTruthMesh(scene);
   const Renderer renderer(scene, truth);
-  auto truth_z = [&](double x, double y) {
-    return renderer.Cast(Eigen::Vector3d(x, y, 1000.0), Eigen::Vector3d(0, 0, -1)).point.z();
-  };
-  StartGridOptions grid;
-  grid.min = scene.roi.min.head<2>();
-  grid.max = scene.roi.max.head<2>();
-  grid.spacing = 2.0;  // 4x4 grey facets of 0.5 m = about 2x2 pixels (seed 000)
-  grid.height = [&](double x, double y) { return truth_z(x, y) - run.shift; };
-  TinMesh mesh = MakeStartGrid(grid);
+  auto truth_z = [&](double x, double y) { return TruthHeight(renderer, x, y); };
+  // 4x4 grey facets of 0.5 m = about 2x2 pixels (seed 000).
+  TinMesh mesh = StartBelowTruth(scene, renderer, 2.0, run.shift);
 
   WindowAdjustment adjustment(&mesh, images, run.options);
   SeedResult result;

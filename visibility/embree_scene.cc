@@ -79,6 +79,7 @@ TriangleScene::TriangleScene(EmbreeDevice& device,
 }
 
 TriangleScene::~TriangleScene() {
+  if (occluder_ != nullptr) rtcReleaseGeometry(occluder_);
   rtcReleaseGeometry(geometry_);
   rtcReleaseScene(scene_);
 }
@@ -99,6 +100,40 @@ void TriangleScene::UpdateVertices(const std::vector<Eigen::Vector3d>& vertices,
   rtcUpdateGeometryBuffer(geometry_, RTC_BUFFER_TYPE_VERTEX, 0);
   rtcCommitGeometry(geometry_);
   // The scene needs a recommit after its geometry changed (harmless before attach).
+  rtcCommitScene(scene_);
+  device_.Check();
+}
+
+void TriangleScene::AddOccluders(const std::vector<Eigen::Vector3d>& vertices,
+                                 const std::vector<Eigen::Vector3i>& triangles) {
+  if (occluder_ != nullptr) throw std::logic_error("TriangleScene: occluders already added");
+  if (triangles.empty()) return;
+  occluder_ = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* vertex_buffer = static_cast<float*>(rtcSetNewGeometryBuffer(
+      occluder_, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 4 * sizeof(float),
+      vertices.size()));
+  auto* index_buffer = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+      occluder_, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+      triangles.size()));
+  device_.Check();
+  for (size_t i = 0; i < vertices.size(); ++i) {
+    for (int k = 0; k < 3; ++k) vertex_buffer[4 * i + k] = static_cast<float>(vertices[i][k]);
+    vertex_buffer[4 * i + 3] = 0.0f;
+  }
+  for (size_t i = 0; i < triangles.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const int index = triangles[i][k];
+      if (index < 0 || static_cast<size_t>(index) >= vertices.size()) {
+        throw std::invalid_argument("TriangleScene: occluder triangle " + std::to_string(i) +
+                                    " has vertex index out of range");
+      }
+      index_buffer[3 * i + k] = static_cast<unsigned>(index);
+    }
+  }
+  rtcCommitGeometry(occluder_);
+  if (rtcAttachGeometry(scene_, occluder_) != 1) {
+    throw std::logic_error("TriangleScene: occluders did not get geometry id 1");
+  }
   rtcCommitScene(scene_);
   device_.Check();
 }
@@ -126,6 +161,7 @@ RayHit TriangleScene::Intersect(const Eigen::Vector3d& origin,
   RayHit result;
   if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return result;
   result.hit = true;
+  result.geom_id = rayhit.hit.geomID;
   result.prim_id = rayhit.hit.primID;
   result.u = rayhit.hit.u;
   result.v = rayhit.hit.v;

@@ -68,6 +68,7 @@ inline void IntersectCoherent16(const int* valid, RTCScene scene, RTCRayHit16* p
 // (u, v) are Embree's barycentrics: point = (1-u-v) V0 + u V1 + v V2.
 struct RayHit {
   bool hit = false;
+  unsigned geom_id = 0;  // 0: the scene's own triangles, 1: occluders (AddOccluders)
   unsigned prim_id = 0;
   float u = 0, v = 0;
   float distance = 0;           // ray parameter t (the direction is not normalised)
@@ -93,6 +94,13 @@ class TriangleScene {
   // one window); rebuild after large moves.
   void UpdateVertices(const std::vector<Eigen::Vector3d>& vertices, bool refit = false);
 
+  // Adds a second, static triangle set (Embree geometry id 1) that stops rays but is
+  // not part of the surface: the rest of the surface around a window, which hides
+  // parts of the window from oblique views. Once per scene, before any query.
+  void AddOccluders(const std::vector<Eigen::Vector3d>& vertices,
+                    const std::vector<Eigen::Vector3i>& triangles);
+  bool HasOccluders() const { return occluder_ != nullptr; }
+
   size_t NumVertices() const { return num_vertices_; }
   size_t NumTriangles() const { return num_triangles_; }
   RTCScene get() const { return scene_; }
@@ -105,6 +113,7 @@ class TriangleScene {
   EmbreeDevice& device_;
   RTCScene scene_ = nullptr;
   RTCGeometry geometry_ = nullptr;
+  RTCGeometry occluder_ = nullptr;
   float* vertex_buffer_ = nullptr;  // owned by Embree, 3 floats + 1 pad per vertex
   size_t num_vertices_ = 0;
   size_t num_triangles_ = 0;

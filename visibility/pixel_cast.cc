@@ -41,6 +41,7 @@ void Accumulate(const CastStats& add, CastStats* total) {
   total->misses += add.misses;
   total->back_faces += add.back_faces;
   total->grazing += add.grazing;
+  total->occluded += add.occluded;
 }
 
 // Casts up to 16 rays (pixels xs[i], ys[i], i < n) as one packet. Writes one entry per
@@ -68,6 +69,12 @@ int CastPacket(RTCScene scene, const PixelRays& rays, const int* xs, const int* 
     obs.y = ys[i];
     if (packet.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID) {
       ++stats->misses;
+      if (options.keep_invalid) out[written++] = obs;
+      continue;
+    }
+    if (packet.hit.geomID[i] != 0) {
+      obs.status = RayStatus::kOccluded;
+      ++stats->occluded;
       if (options.keep_invalid) out[written++] = obs;
       continue;
     }

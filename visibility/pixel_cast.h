@@ -40,6 +40,7 @@ enum class RayStatus : uint8_t {
   kMiss,             // the ray leaves the scene
   kBackFace,         // first hit on a back face (ray direction . facet normal > 0)
   kGrazing,          // |cos incidence| below CastOptions::min_cos_incidence
+  kOccluded,         // first hit on an occluder (SurfaceScene::SetOccluders)
 };
 
 // One pixel's first hit, 40 bytes. Face barycentrics are float: they are mapped from
@@ -84,6 +85,7 @@ struct CastStats {
   long long misses = 0;
   long long back_faces = 0;
   long long grazing = 0;
+  long long occluded = 0;
 };
 
 struct CastResult {

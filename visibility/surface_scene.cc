@@ -40,10 +40,20 @@ SurfaceScene::UpdateKind SurfaceScene::Update(const Tessellation& tessellation,
   }
   auto scene = std::make_unique<TriangleScene>(device_, tessellation.points,
                                                tessellation.triangles, refittable_);
+  if (!occluder_triangles_.empty()) scene->AddOccluders(occluder_points_, occluder_triangles_);
   scene_ = std::move(scene);
   triangles_ = tessellation.triangles;
   ++num_builds_;
   return UpdateKind::kRebuilt;
+}
+
+void SurfaceScene::SetOccluders(const Tessellation& tessellation,
+                                std::vector<Eigen::Vector3d> points,
+                                std::vector<Eigen::Vector3i> triangles) {
+  occluder_points_ = std::move(points);
+  occluder_triangles_ = std::move(triangles);
+  triangles_.clear();  // forces Update() to rebuild, which adds the occluders
+  Update(tessellation);
 }
 
 }  // namespace facets

@@ -28,6 +28,12 @@ class SurfaceScene {
   explicit SurfaceScene(const Tessellation& tessellation, bool refittable = true)
       : SurfaceScene(EmbreeDevice::Shared(), tessellation, refittable) {}
 
+  // Triangles that hide parts of this surface without belonging to it (the surface
+  // around a window); kept across rebuilds. Rays that hit them first are kOccluded.
+  // Rebuilds the scene from `tessellation` (the surface's current state).
+  void SetOccluders(const Tessellation& tessellation, std::vector<Eigen::Vector3d> points,
+                    std::vector<Eigen::Vector3i> triangles);
+
   enum class UpdateKind { kMovedVertices, kRebuilt };
   // Moves the vertices in place when the topology is unchanged, rebuilds otherwise.
   // refit (default; only with a refittable scene): Embree only refits its BVH to the moved vertices, right for the
@@ -52,6 +58,8 @@ class SurfaceScene {
   std::vector<Eigen::Vector3i> triangles_;  // topology of the current scene
   std::unique_ptr<TriangleScene> scene_;
   bool refittable_ = true;
+  std::vector<Eigen::Vector3d> occluder_points_;
+  std::vector<Eigen::Vector3i> occluder_triangles_;
   int num_builds_ = 0;
 };
 

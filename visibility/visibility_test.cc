@@ -295,6 +295,50 @@ TEST(CastPixels, OccludedPixelsNeverSeeTheHiddenGround) {
   EXPECT_EQ(hidden_faces_with_pixels, 0);
 }
 
+// Occluders (the surface around a window) stop rays like the surface itself, but a
+// pixel that hits them first is kOccluded: split the wall-on-ground scene into the
+// ground (the window) and the wall (occluders) and compare with the whole scene.
+TEST(CastPixels, OccludersHideLikeTheWholeSurface) {
+  const Eigen::Vector3d wall_min(-6, -0.25, 0), wall_max(6, 0.25, 4);
+  int num_ground_faces = 0;
+  const FlatMesh whole = GroundWithBox(wall_min, wall_max, 20, &num_ground_faces);
+  FlatMesh ground, wall;
+  AppendGridForTesting(-10, -10, 10, 10, 20, 20, [](double, double) { return 0.0; }, &ground);
+  AppendBoxForTesting(wall_min, wall_max, /*with_bottom=*/false, &wall);
+  const Tessellation whole_tess = TessellateFlatForTesting(whole);
+  const Tessellation ground_tess = TessellateFlatForTesting(ground);
+  const Tessellation wall_tess = TessellateFlatForTesting(wall);
+  const SurfaceScene whole_scene(whole_tess);
+  SurfaceScene window_scene(ground_tess);
+  window_scene.SetOccluders(ground_tess, wall_tess.points, wall_tess.triangles);
+  const Camera camera = PinholeCamera(320, 240, 250);
+  const Rigid3d pose = LookAt({0, -18, 6}, {0, 4, 0});
+  CastOptions options;
+  options.keep_invalid = true;
+  const CastResult a = CastPixels(whole_scene, camera, pose, PixelRect::Full(camera), options);
+  const CastResult b = CastPixels(window_scene, camera, pose, PixelRect::Full(camera), options);
+  ASSERT_EQ(a.observations.size(), b.observations.size());
+  long long mismatched = 0, on_wall = 0;
+  for (size_t i = 0; i < a.observations.size(); ++i) {
+    const PixelObservation& pa = a.observations[i];
+    const PixelObservation& pb = b.observations[i];
+    ASSERT_EQ(pa.x, pb.x);
+    ASSERT_EQ(pa.y, pb.y);
+    const bool wall_hit = pa.status != RayStatus::kMiss && pa.face >= num_ground_faces;
+    on_wall += wall_hit;
+    if (wall_hit) {
+      mismatched += pb.status != RayStatus::kOccluded;
+    } else {
+      mismatched += pb.status != pa.status || (pa.valid() && pa.face != pb.face);
+    }
+  }
+  std::cout << "occluders: " << on_wall << " pixels on the wall, " << b.stats.occluded
+            << " occluded, " << mismatched << " pixels differ\n";
+  EXPECT_GT(on_wall, 5000);
+  EXPECT_EQ(b.stats.occluded, on_wall - mismatched);
+  EXPECT_LE(mismatched, 10);  // ties on the wall's foot line may go either way
+}
+
 // Rays honour lens distortion: the hit point, rebuilt from face barycentrics,
 // projects back onto the pixel centre.
 TEST(CastPixels, HitPointsReprojectThroughDistortion) {

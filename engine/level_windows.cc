@@ -1,0 +1,278 @@
+#include "engine/level_windows.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <stdexcept>
+
+#include "mesh/creases.h"
+#include "visibility/image_selection.h"
+
+namespace facets {
+namespace {
+
+struct WindowResult {
+  WindowReport report;
+  bool observed = false;
+  std::string error;
+  std::vector<int> global_face;
+  std::vector<Eigen::Vector3i> triangles;  // of the window's tessellation
+  std::vector<double> grey;
+  int channels = 1;
+};
+
+// The images whose view the window's surface (grown by a quarter of its size, since
+// the surface moves during the adjustment) overlaps: the others would only add
+// radiometric unknowns without observations.
+std::vector<LevelImage> ImagesSeeing(const TinMesh& mesh, const std::vector<LevelImage>& images) {
+  Eigen::AlignedBox3d box;
+  for (auto vh : mesh.vertices()) box.extend(ToEigen(mesh.point(vh)));
+  const Eigen::Vector3d grow = Eigen::Vector3d::Constant(0.25 * box.diagonal().norm());
+  box.extend(box.min() - grow);
+  box.extend(box.max() + grow);
+  std::vector<LevelImage> seeing;
+  for (const LevelImage& image : images) {
+    if (ProjectBox(box, *image.camera, image.cam_from_world)) seeing.push_back(image);
+  }
+  return seeing;
+}
+
+// The window run, and a second run when the first one sharpened new creases (the
+// adjustment keeps one crease set per run).
+WindowReport RunWithCreasePass(TinMesh* mesh, const std::vector<LevelImage>& images,
+                               const AdjustmentOptions& options, const std::vector<bool>& fixed,
+                               const std::vector<bool>& judged,
+                               const Tessellation* occluder_points,
+                               const std::vector<Eigen::Vector3i>& occluders,
+                               bool second_pass, WindowResult* result) {
+  auto run = [&]() {
+    auto adjustment = std::make_unique<WindowAdjustment>(mesh, images, options);
+    adjustment->SetFixedVertices(fixed);
+    adjustment->SetBreakOffVertices(judged);
+    if (!occluders.empty()) adjustment->SetOccluders(occluder_points->points, occluders);
+    WindowReport report = adjustment->Run();
+    result->triangles = adjustment->tessellation().triangles;
+    result->grey = adjustment->grey();
+    result->channels = adjustment->channels();
+    return report;
+  };
+  WindowReport first = run();
+  if (!second_pass) return first;
+  const std::vector<bool> creases = DetectCreaseEdges(*mesh, options.crease_angle_deg);
+  const int found = static_cast<int>(std::count(creases.begin(), creases.end(), true));
+  if (found <= first.crease_edges) return first;
+  WindowReport second = run();
+  const int first_iterations = static_cast<int>(first.iterations.size());
+  for (auto& it : second.iterations) it.iteration += first_iterations;
+  second.iterations.insert(second.iterations.begin(), first.iterations.begin(),
+                           first.iterations.end());
+  second.cg_iterations_total += first.cg_iterations_total;
+  return second;
+}
+
+Tessellation TessellateWithCreases(const TinMesh& mesh, double crease_angle_deg) {
+  const CornerNormals corners = ComputeCornerNormals(mesh, DetectCreaseEdges(mesh, crease_angle_deg));
+  return Tessellate(mesh, BuildPatches(mesh, corners), corners);
+}
+
+}  // namespace
+
+void LevelWindowOptions::Check() const {
+  partition.Check();
+  if (sweeps < 1) throw std::invalid_argument("windows: sweeps must be >= 1");
+  if (free_margin_sweeps < 0) throw std::invalid_argument("windows: free_margin_sweeps must be >= 0");
+}
+
+LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const std::vector<LevelImage>& images,
+                                     const AdjustmentOptions& adjustment,
+                                     const LevelWindowOptions& options, bool keep_grey,
+                                     const std::function<void(const std::string&)>& progress) {
+  options.Check();
+  const auto start = std::chrono::steady_clock::now();
+  std::mutex say_mutex;
+  auto say = [&](const std::string& line) {
+    std::lock_guard<std::mutex> lock(say_mutex);
+    if (progress) progress(line);
+  };
+  LevelAdjustment level;
+  const std::vector<MeshWindow> windows = PartitionIntoWindows(*mesh, options.partition);
+  const std::vector<std::vector<int>> groups = IndependentWindowGroups(*mesh, windows);
+  level.groups = static_cast<int>(groups.size());
+  for (const auto& w : windows) level.window_core_faces.push_back(static_cast<int>(w.core_faces.size()));
+  const bool many = windows.size() > 1;
+  std::vector<int> face_window(mesh->n_faces(), -1);
+  for (size_t w = 0; w < windows.size(); ++w) {
+    for (int f : windows[w].core_faces) face_window[f] = static_cast<int>(w);
+  }
+
+  const int num_vertices = static_cast<int>(mesh->n_vertices());
+  std::vector<WindowResult> results(windows.size());
+  int done = 0;
+  // One window holds every vertex: nothing to sweep over.
+  const int sweeps = many ? options.sweeps : 1;
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
+    for (const std::vector<int>& group : groups) {
+      // The surface as it stands before this group, for the occluders: the windows of a
+      // group change disjoint parts and must not read each other's half-moved state.
+      Tessellation snapshot;
+      if (many && options.occluders) snapshot = TessellateWithCreases(*mesh, adjustment.crease_angle_deg);
+      tbb::parallel_for(size_t{0}, group.size(), [&](size_t g) {
+        const int w = group[g];
+        WindowMesh wm = ExtractWindowMesh(*mesh, windows[w]);
+        std::vector<Eigen::Vector3i> occluders;
+        if (many && options.occluders) {
+          std::vector<char> in_window(mesh->n_faces(), 0);
+          for (int f : windows[w].faces) in_window[f] = 1;
+          occluders.reserve(snapshot.triangles.size());
+          for (size_t s = 0; s < snapshot.triangles.size(); ++s) {
+            if (!in_window[s / kSubTrianglesPerFace]) occluders.push_back(snapshot.triangles[s]);
+          }
+        }
+        WindowResult& result = results[w];
+        result = WindowResult{};
+        result.global_face = wm.global_face;
+        const std::vector<LevelImage> seeing = ImagesSeeing(wm.mesh, images);
+        try {
+          if (seeing.empty()) throw std::runtime_error("no image sees the window");
+          const std::vector<bool> fixed =
+              sweep < options.free_margin_sweeps ? std::vector<bool>(wm.fixed.size(), false) : wm.fixed;
+          std::vector<bool> judged(wm.fixed.size(), !many);
+          for (int local : wm.owned_local) judged[local] = true;
+          result.report = RunWithCreasePass(&wm.mesh, seeing, adjustment, fixed, judged, &snapshot,
+                                            occluders, options.crease_second_pass, &result);
+          result.observed = true;
+        } catch (const std::runtime_error& e) {
+          result.error = e.what();
+        }
+        // Only the core's vertices go back into the level's mesh.
+        for (int local : wm.owned_local) {
+          const auto lh = wm.mesh.vertex_handle(local);
+          const auto gh = mesh->vertex_handle(wm.global_vertex[local]);
+          mesh->set_point(gh, wm.mesh.point(lh));
+          mesh->set_normal(gh, wm.mesh.normal(lh));
+        }
+        int finished = 0;
+        {
+          std::lock_guard<std::mutex> lock(say_mutex);
+          finished = ++done;
+        }
+        std::string line = "  window " + std::to_string(finished) + "/" +
+                           std::to_string(windows.size() * sweeps) + " (#" +
+                           std::to_string(w + 1) + ")" +
+                           (sweeps > 1 ? ", sweep " + std::to_string(sweep + 1) : "") +
+                           ": " + std::to_string(windows[w].core_faces.size()) + " core faces, ";
+        if (result.observed) {
+          line += std::to_string(result.report.iterations.size()) + " iterations, sigma0 " +
+                  std::to_string(result.report.sigma0) + ", " +
+                  std::to_string(result.report.observations) + " observations";
+        } else {
+          line += "not adjusted: " + result.error;
+        }
+        say(line);
+        // Per-vertex results, re-indexed to the owned vertices (MeshWindow order).
+        if (sweep + 1 == sweeps) {
+          WindowReport& r = result.report;
+          std::vector<double> sigma;
+          std::vector<int> views;
+          std::vector<uint8_t> flags;
+          for (int local : wm.owned_local) {
+            sigma.push_back(result.observed ? r.vertex_sigma[local] : 0.0);
+            views.push_back(result.observed ? r.vertex_views[local] : 0);
+            flags.push_back(result.observed ? r.vertex_flags[local] : uint8_t{kVertexFewViews});
+          }
+          r.vertex_sigma = std::move(sigma);
+          r.vertex_views = std::move(views);
+          r.vertex_flags = std::move(flags);
+        }
+      });
+    }
+  }
+  UpdateVertexNormals(mesh);
+
+  // Summary and per-vertex values.
+  WindowReport& s = level.summary;
+  s.converged = true;
+  s.vertex_sigma.assign(num_vertices, 0.0);
+  s.vertex_views.assign(num_vertices, 0);
+  s.vertex_flags.assign(num_vertices, kVertexFewViews);
+  s.precision_computed = true;
+  double pooled = 0.0;
+  bool any = false;
+  for (size_t w = 0; w < windows.size(); ++w) {
+    const WindowResult& result = results[w];
+    const WindowReport& r = result.report;
+    for (size_t i = 0; i < windows[w].owned_vertices.size(); ++i) {
+      const int v = windows[w].owned_vertices[i];
+      s.vertex_sigma[v] = r.vertex_sigma[i];
+      s.vertex_views[v] = r.vertex_views[i];
+      s.vertex_flags[v] = static_cast<uint8_t>(r.vertex_flags[i] & ~kVertexFixed);
+    }
+    if (!result.observed) {
+      s.converged = false;
+      level.windows.push_back(r);
+      continue;
+    }
+    any = true;
+    s.converged = s.converged && r.converged;
+    s.observations += r.observations;
+    s.pseudo_observations += r.pseudo_observations;
+    s.unknowns += r.unknowns;
+    s.redundancy += r.redundancy;
+    s.cg_iterations_total += r.cg_iterations_total;
+    s.crease_edges += r.crease_edges;
+    s.seconds_precision += r.seconds_precision;
+    s.precision_computed = s.precision_computed && r.precision_computed;
+    pooled += r.sigma0 * r.sigma0 * static_cast<double>(r.redundancy);
+    if (r.iterations.size() > s.iterations.size()) s.iterations = r.iterations;
+    level.windows.push_back(r);
+  }
+  if (!any) {
+    throw std::runtime_error("no window of the level has any observation (" +
+                             results.front().error + ")");
+  }
+  s.sigma0 = s.redundancy > 0 ? std::sqrt(pooled / static_cast<double>(s.redundancy)) : 0.0;
+  s.radiometry = windows.size() == 1 ? results.front().report.radiometry
+                                     : std::vector<std::vector<std::array<double, 2>>>{};
+
+  if (keep_grey) {
+    level.tessellation = TessellateWithCreases(*mesh, adjustment.crease_angle_deg);
+    const int channels = results.front().channels;
+    level.grey.assign(level.tessellation.points.size() * channels,
+                      std::numeric_limits<double>::quiet_NaN());
+    for (size_t w = 0; w < windows.size(); ++w) {
+      const WindowResult& result = results[w];
+      if (!result.observed) continue;
+      for (size_t lf = 0; lf < result.global_face.size(); ++lf) {
+        const int f = result.global_face[lf];
+        if (face_window[f] != static_cast<int>(w)) continue;
+        for (int k = 0; k < kSubTrianglesPerFace; ++k) {
+          const Eigen::Vector3i& to = level.tessellation.triangles[f * kSubTrianglesPerFace + k];
+          const Eigen::Vector3i& from = result.triangles[lf * kSubTrianglesPerFace + k];
+          for (int corner = 0; corner < 3; ++corner) {
+            for (int c = 0; c < channels; ++c) {
+              level.grey[static_cast<size_t>(to[corner]) * channels + c] =
+                  result.grey[static_cast<size_t>(from[corner]) * channels + c];
+            }
+          }
+        }
+      }
+    }
+    // Nodes of windows without observations: the mean grey value.
+    double sum = 0.0;
+    long long count = 0;
+    for (double g : level.grey) {
+      if (std::isfinite(g)) sum += g, ++count;
+    }
+    for (double& g : level.grey) {
+      if (!std::isfinite(g)) g = count > 0 ? sum / count : 0.0;
+    }
+  }
+  s.seconds_total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return level;
+}
+
+}  // namespace facets

@@ -1,0 +1,64 @@
+// One pyramid level adjusted in windows (DESIGN.md section 2): the level's TIN is split
+// into overlapping windows of a few hundred geometry triangles (mesh/windows.h), each
+// adjusted on its own with its margin's outer vertices held fixed, only its core
+// vertices kept. Windows that share no vertex run in parallel (TBB); groups of such
+// windows run one after another, so a window sees the results of the groups before it
+// (a multiplicative Schwarz sweep). The rest of the surface is in each window's Embree
+// scene as occluder: a pixel that sees a neighbouring building first is no
+// observation of the window behind it.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "engine/adjustment_options.h"
+#include "engine/window_adjustment.h"
+#include "mesh/tessellation.h"
+#include "mesh/tin.h"
+#include "mesh/windows.h"
+
+namespace facets {
+
+struct LevelWindowOptions {
+  WindowPartitionOptions partition;
+  // Sweeps over all windows (2+: windows processed early see their neighbours'
+  // results too; seams shrink).
+  int sweeps = 2;
+  // Sweeps (from the first) in which the margin's outer vertices are estimated too
+  // instead of held fixed: on the first sweep the neighbours still sit at the start
+  // values (possibly decimetres off), and holding them would bend the margin and pull
+  // the core; later sweeps hold them at their adjusted values.
+  int free_margin_sweeps = 1;
+  // Put the surface outside the window into its scene as occluder.
+  bool occluders = true;
+  // One more window run with the crease set found after the first, when the
+  // adjustment sharpened new creases (a ridge grown out of a plane start).
+  bool crease_second_pass = true;
+  void Check() const;
+};
+
+struct LevelAdjustment {
+  // Summary of the level: converged = every window converged; sigma0 pooled over the
+  // windows (sqrt of sum sigma0^2 r / sum r, margins counted in every window that
+  // holds them); counts summed; iterations = those of the window that needed most;
+  // per-vertex values from each vertex's own window.
+  WindowReport summary;
+  std::vector<WindowReport> windows;  // in window order (last sweep)
+  std::vector<int> window_core_faces;
+  int groups = 0;
+  // Of the whole level when requested (keep_grey): the tessellation of the final
+  // surface (creases as DetectCreaseEdges finds them) and the object grey values per
+  // node, each face's from the window whose core holds it.
+  Tessellation tessellation;
+  std::vector<double> grey;
+};
+
+// Adjusts *mesh (vertex normals set) in place. progress gets one line per window.
+// Throws std::runtime_error when no window has any observation.
+LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const std::vector<LevelImage>& images,
+                                     const AdjustmentOptions& adjustment,
+                                     const LevelWindowOptions& options, bool keep_grey,
+                                     const std::function<void(const std::string&)>& progress);
+
+}  // namespace facets
