@@ -43,6 +43,8 @@ struct ReconstructArgs {
   int window_margin = WindowPartitionOptions().margin_rings;
   int sweeps = LevelWindowOptions().sweeps;
   bool no_occluders = false;
+  bool tiled_images = false;
+  double image_memory_mb = 1024.0;
   int threads = 0;
   bool no_glb = false, no_vrml = false, no_rasters = false;
 };
@@ -91,6 +93,18 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.windows.partition.margin_rings = args.window_margin;
   options.windows.sweeps = args.sweeps;
   options.windows.occluders = !args.no_occluders;
+  // Level images in memory while they fit the budget, else tiled on disk and read per
+  // window (pyramid: 4/3 of the originals; float per channel).
+  double pyramid_mb = 0.0;
+  for (const auto& image : block.images) {
+    const Camera& camera = block.CameraOf(image);
+    pyramid_mb += 4.0 / 3.0 * camera.width * camera.height * (args.colour ? 3 : 1) * 4.0 / (1024.0 * 1024.0);
+  }
+  if (args.tiled_images || pyramid_mb > args.image_memory_mb) {
+    options.image_cache_dir = (std::filesystem::path(args.out) / ".image-cache").string();
+    options.image_cache_mb = std::max(64.0, 0.5 * args.image_memory_mb);
+    say("level images: " + std::to_string(static_cast<int>(pyramid_mb)) + " MB, read per window from tiled files");
+  }
   if (!args.roi.empty()) {
     if (args.roi.size() != 6) throw std::invalid_argument("--roi takes 6 numbers: xmin ymin zmin xmax ymax zmax");
     RegionOfInterest roi;
@@ -150,6 +164,8 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--window-margin", args->window_margin, "face rings around a window's core")->capture_default_str();
   sub->add_option("--sweeps", args->sweeps, "sweeps over the windows of a level")->capture_default_str();
   sub->add_flag("--no-occluders", args->no_occluders, "windows do not see the surface around them");
+  sub->add_flag("--tiled-images", args->tiled_images, "level images on disk, read per window (also when over --image-memory)");
+  sub->add_option("--image-memory", args->image_memory_mb, "MB for level images in memory; more goes to tiled files")->capture_default_str();
   sub->add_option("--threads", args->threads, "threads (0 = all cores)")->capture_default_str();
   sub->add_flag("--no-glb", args->no_glb, "do not write surface.glb");
   sub->add_flag("--no-vrml", args->no_vrml, "do not write surface.wrl");

@@ -25,20 +25,15 @@ struct WindowResult {
   int channels = 1;
 };
 
-// The images whose view the window's surface (grown by a quarter of its size, since
-// the surface moves during the adjustment) overlaps: the others would only add
-// radiometric unknowns without observations.
-std::vector<LevelImage> ImagesSeeing(const TinMesh& mesh, const std::vector<LevelImage>& images) {
+// The window's surface grown by a quarter of its size: the surface moves during the
+// adjustment, and the images (regions) must cover where it goes.
+Eigen::AlignedBox3d GrownBox(const TinMesh& mesh) {
   Eigen::AlignedBox3d box;
   for (auto vh : mesh.vertices()) box.extend(ToEigen(mesh.point(vh)));
   const Eigen::Vector3d grow = Eigen::Vector3d::Constant(0.25 * box.diagonal().norm());
   box.extend(box.min() - grow);
   box.extend(box.max() + grow);
-  std::vector<LevelImage> seeing;
-  for (const LevelImage& image : images) {
-    if (ProjectBox(box, *image.camera, image.cam_from_world)) seeing.push_back(image);
-  }
-  return seeing;
+  return box;
 }
 
 // The window run, and a second run when the first one sharpened new creases (the
@@ -91,6 +86,20 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const std::vector<LevelImage
                                      const AdjustmentOptions& adjustment,
                                      const LevelWindowOptions& options, bool keep_grey,
                                      const std::function<void(const std::string&)>& progress) {
+  const WindowImages seeing = [&](const Eigen::AlignedBox3d& box, ImageStorage*) {
+    std::vector<LevelImage> list;
+    for (const LevelImage& image : images) {
+      if (ProjectBox(box, *image.camera, image.cam_from_world)) list.push_back(image);
+    }
+    return list;
+  };
+  return AdjustLevelInWindows(mesh, seeing, adjustment, options, keep_grey, progress);
+}
+
+LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
+                                     const AdjustmentOptions& adjustment,
+                                     const LevelWindowOptions& options, bool keep_grey,
+                                     const std::function<void(const std::string&)>& progress) {
   options.Check();
   const auto start = std::chrono::steady_clock::now();
   std::mutex say_mutex;
@@ -135,7 +144,8 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const std::vector<LevelImage
         WindowResult& result = results[w];
         result = WindowResult{};
         result.global_face = wm.global_face;
-        const std::vector<LevelImage> seeing = ImagesSeeing(wm.mesh, images);
+        ImageStorage storage;  // the window's image regions, freed with the window
+        const std::vector<LevelImage> seeing = images(GrownBox(wm.mesh), &storage);
         try {
           if (seeing.empty()) throw std::runtime_error("no image sees the window");
           const std::vector<bool> fixed =

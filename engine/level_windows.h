@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "engine/adjustment_options.h"
+#include "engine/level_image_store.h"
 #include "engine/window_adjustment.h"
 #include "mesh/tessellation.h"
 #include "mesh/tin.h"
@@ -54,6 +55,18 @@ struct LevelAdjustment {
   std::vector<double> grey;
 };
 
+// The images a window gets: those whose view overlaps the box, with pixels at least
+// over its projection; regions read for the window go into the storage, which lives
+// as long as the window's adjustment (engine/level_image_store.h).
+using WindowImages = std::function<std::vector<LevelImage>(const Eigen::AlignedBox3d& box,
+                                                           ImageStorage* storage)>;
+
+LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
+                                     const AdjustmentOptions& adjustment,
+                                     const LevelWindowOptions& options, bool keep_grey,
+                                     const std::function<void(const std::string&)>& progress);
+
+// Same with whole images in memory.
 // Adjusts *mesh (vertex normals set) in place. progress gets one line per window.
 // Throws std::runtime_error when no window has any observation.
 LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const std::vector<LevelImage>& images,

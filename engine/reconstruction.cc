@@ -124,6 +124,7 @@ std::string ReconstructionReport::Json() const {
   j["start_height"] = start_height;
   j["seconds_total"] = seconds_total;
   j["seconds_images"] = seconds_images;
+  j["images_cached"] = images_cached;
   for (const auto& t : lifting) {
     j["object_lifting"].push_back({{"height", t.height}, {"sigma0", t.sigma0},
                                    {"mean_dn", t.mean_dn}, {"observations", t.observations}});
@@ -207,24 +208,26 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
   say("stage images: reading " + std::to_string(block.images.size()) + " images, " +
       std::to_string(num_levels) + " pyramid levels");
   const auto images_start = std::chrono::steady_clock::now();
-  std::vector<std::vector<ImagePlanes>> pyramids(block.images.size());
-  std::vector<std::vector<Camera>> cameras(block.images.size());
-  tbb::parallel_for(size_t{0}, block.images.size(), [&](size_t k) {
-    ImagePlanes planes = ReadImageFor(block.images[k].path, block.CameraOf(block.images[k]));
-    if (!options.colour) planes = planes.Grey();
-    pyramids[k] = BuildPyramid(planes, num_levels, options.filter);
-    cameras[k].push_back(block.CameraOf(block.images[k]));
-    for (int l = 1; l < num_levels; ++l) cameras[k].push_back(cameras[k].back().Scaled(0.5));
-  });
+  LevelImageStoreOptions store_options;
+  store_options.levels = num_levels;
+  store_options.filter = options.filter;
+  store_options.colour = options.colour;
+  if (options.image_cache_dir) {
+    store_options.cache_dir = *options.image_cache_dir;
+    store_options.cache_memory_mb = options.image_cache_mb;
+  }
+  const LevelImageStore store(block, store_options);
   result.report.seconds_images = Seconds(images_start);
-  result.channels = pyramids.front().front().channels;
-  auto level_images = [&](int level) {
-    std::vector<LevelImage> images;
-    for (size_t k = 0; k < block.images.size(); ++k) {
-      images.push_back({block.images[k].image_id, &cameras[k][level],
-                        block.images[k].cam_from_world, &pyramids[k][level]});
-    }
-    return images;
+  result.report.images_cached = store.cached();
+  result.channels = store.channels();
+  say("  " + std::string(store.cached() ? "tiled level images in " + store_options.cache_dir
+                                        : "level images in memory: " + std::to_string(store.MemoryMb()) + " MB"));
+  ImageStorage whole_storage;  // whole coarse images read for object lifting
+  auto level_images = [&](int level) { return store.Whole(level, &whole_storage); };
+  auto window_images = [&](int level) -> WindowImages {
+    return [&store, level](const Eigen::AlignedBox3d& box, ImageStorage* storage) {
+      return store.Seeing(level, box, storage);
+    };
   };
   auto edge_length = [&](int level) {
     return kSubdivisions * options.facet_pixels * gsd0 * std::pow(2.0, level);
@@ -304,7 +307,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     say("stage adjust: level " + std::to_string(level) + " (" + std::to_string(coarsest - level + 1) +
         "/" + std::to_string(num_levels) + "), " + std::to_string(mesh.n_faces()) +
         " faces, ground pixel " + std::to_string(level_report.ground_pixel) + " m");
-    LevelAdjustment adjusted = AdjustLevelInWindows(&mesh, level_images(level), level_options(level),
+    LevelAdjustment adjusted = AdjustLevelInWindows(&mesh, window_images(level), level_options(level),
                                                     options.windows, level == 0, options.progress);
     level_report.window = std::move(adjusted.summary);
     level_report.windows = std::move(adjusted.windows);

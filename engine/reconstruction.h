@@ -4,7 +4,8 @@
 // pass, tangential smoothing) one pyramid level down.
 //
 // Each level is adjusted in overlapping windows (engine/level_windows.h), windows
-// that share no vertex in parallel. Every image of every level is held in memory.
+// that share no vertex in parallel. The level images are held in memory, or written as
+// tiled TIFFs and read per window region (engine/level_image_store.h).
 #pragma once
 
 #include <functional>
@@ -45,6 +46,10 @@ struct ReconstructionOptions {
   double lifting_range = 30.0;
   // Region of interest (local); default: the block's, else the tie points' extent.
   std::optional<RegionOfInterest> roi;
+  // Tiled level images in this folder, read per window through a cache of
+  // image_cache_mb; empty: every level image in memory.
+  std::optional<std::string> image_cache_dir;
+  double image_cache_mb = 256.0;
   // Called with one line of progress at a time (stage, level, iteration, sigma0).
   std::function<void(const std::string&)> progress;
 
@@ -77,6 +82,7 @@ struct ReconstructionReport {
   std::vector<LevelReport> levels;  // in processing order, coarsest first
   double seconds_total = 0.0;
   double seconds_images = 0.0;
+  bool images_cached = false;
   std::string Json() const;
   std::string BriefReport() const;
 };

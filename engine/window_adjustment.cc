@@ -78,9 +78,11 @@ WindowAdjustment::WindowAdjustment(TinMesh* mesh, std::vector<LevelImage> images
                                   " has " + std::to_string(image.pixels->channels) +
                                   " channels, expected " + std::to_string(channels_));
     }
-    if (image.pixels->width != image.camera->width || image.pixels->height != image.camera->height) {
+    const ImagePlanes& p = *image.pixels;
+    if (p.x0 < 0 || p.y0 < 0 || p.x0 + p.width > image.camera->width ||
+        p.y0 + p.height > image.camera->height) {
       throw std::invalid_argument("WindowAdjustment: image " + std::to_string(image.image_id) +
-                                  " size does not match its camera");
+                                  " pixels reach outside its camera's image");
     }
   }
   if (options_.reference_image >= static_cast<int>(images_.size())) {
@@ -228,7 +230,12 @@ long long WindowAdjustment::CastAll(std::vector<std::vector<PixelObservation>>* 
   for (size_t k = 0; k < images_.size(); ++k) {
     const auto rect = ProjectBox(box, *images_[k].camera, images_[k].cam_from_world);
     if (!rect) continue;
-    (*casts)[k] = CastPixels(*scene_, *images_[k].camera, images_[k].cam_from_world, *rect,
+    // Only pixels the window was given (a region of the image when read per window).
+    const ImagePlanes& pixels = *images_[k].pixels;
+    const PixelRect held{pixels.x0, pixels.y0, pixels.x0 + pixels.width, pixels.y0 + pixels.height};
+    const PixelRect cast = rect->Intersection(held);
+    if (cast.Empty()) continue;
+    (*casts)[k] = CastPixels(*scene_, *images_[k].camera, images_[k].cam_from_world, cast,
                              cast_options).observations;
     total += static_cast<long long>((*casts)[k].size());
   }
@@ -248,13 +255,13 @@ void WindowAdjustment::InitialiseGrey(const std::vector<std::vector<PixelObserva
       for (int corner = 0; corner < 3; ++corner) {
         weight[tri[corner]] += w[corner];
         for (int c = 0; c < channels_; ++c) {
-          const double g = pixels.data[(static_cast<size_t>(c) * pixels.height + obs.y) * pixels.width + obs.x];
+          const double g = pixels.at(c, obs.x, obs.y);
           const auto& rad = radiometry_[k][c];
           sum[tri[corner] * channels_ + c] += w[corner] * (g * rad[1] + rad[0]);
         }
       }
       for (int c = 0; c < channels_; ++c) {
-        total += pixels.data[(static_cast<size_t>(c) * pixels.height + obs.y) * pixels.width + obs.x];
+        total += pixels.at(c, obs.x, obs.y);
       }
       ++count;
     }
@@ -310,7 +317,7 @@ double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservati
           const ObservationCoefficients lin =
               Linearise(ray, facet, obs.u, obs.v, Radiometry{rad[0], rad[1]});
           if (!lin.valid) continue;
-          const double g = pixels.data[(static_cast<size_t>(c) * pixels.height + obs.y) * pixels.width + obs.x];
+          const double g = pixels.at(c, obs.x, obs.y);
           const double l = g - lin.predicted;
           const double a[6] = {lin.dn[0], lin.dn[1], lin.dn[2], lin.grey[0], lin.grey[1], lin.grey[2]};
           const int64_t* table = &slots_[(static_cast<size_t>(f) * channels_ + c) * kLocal * kLocal];

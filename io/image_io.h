@@ -14,7 +14,13 @@ namespace facets {
 struct ImagePlanes {
   int width = 0, height = 0, channels = 0;
   int bits = 8;   // bit depth of the source file (8, 16, 32 for float)
+  // Pixel (x0, y0) of the whole image is the first stored pixel: a region read from a
+  // larger image (io/image_cache.h). at() takes whole-image pixel indices.
+  int x0 = 0, y0 = 0;
   std::vector<float> data;
+  bool Holds(int x, int y) const {
+    return x >= x0 && y >= y0 && x < x0 + width && y < y0 + height;
+  }
   float& at(int c, int x, int y);
   float at(int c, int x, int y) const;
   // Mean over channels into one grey plane.
@@ -23,10 +29,10 @@ struct ImagePlanes {
 
 // Inline: called once per pixel ray in the inner loops.
 inline float& ImagePlanes::at(int c, int x, int y) {
-  return data[(static_cast<size_t>(c) * height + y) * width + x];
+  return data[(static_cast<size_t>(c) * height + (y - y0)) * width + (x - x0)];
 }
 inline float ImagePlanes::at(int c, int x, int y) const {
-  return data[(static_cast<size_t>(c) * height + y) * width + x];
+  return data[(static_cast<size_t>(c) * height + (y - y0)) * width + (x - x0)];
 }
 
 ImagePlanes ReadImage(const std::string& path);          // via OpenImageIO
