@@ -178,7 +178,8 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
         if (result.observed) {
           line += std::to_string(result.report.iterations.size()) + " iterations, sigma0 " +
                   std::to_string(result.report.sigma0) + ", " +
-                  std::to_string(result.report.observations) + " observations";
+                  std::to_string(result.report.observations) + " observations" +
+                  (result.report.converged ? "" : result.report.stalled ? " (stalled)" : " (not converged)");
         } else {
           line += "not adjusted: " + result.error;
         }
@@ -229,6 +230,7 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
     any = true;
     s.converged = s.converged && r.converged;
     s.observations += r.observations;
+    s.rejected += r.rejected;
     s.pseudo_observations += r.pseudo_observations;
     s.unknowns += r.unknowns;
     s.redundancy += r.redundancy;

@@ -48,6 +48,7 @@ struct IterationReport {
   long long observations = 0;
   int cg_iterations = 0;
   double sigma0 = 0.0;           // of this linearisation, grey values
+  long long rejected = 0;        // pixels given weight 0 (AdjustmentOptions::reject_sigma)
   double max_dn_interior = 0.0;  // object units
   double max_dn_border = 0.0;
   double max_dn_corner = 0.0;
@@ -60,8 +61,10 @@ struct IterationReport {
 struct WindowReport {
   std::vector<IterationReport> iterations;
   bool converged = false;
+  bool stalled = false;  // stopped by AdjustmentOptions::stall_iterations
   double sigma0 = 0.0;  // grey values, of the last linearisation
   long long observations = 0;
+  long long rejected = 0;  // of the last iteration, not counted in observations
   long long pseudo_observations = 0;
   int unknowns = 0;
   long long redundancy = 0;
@@ -113,12 +116,15 @@ class WindowAdjustment {
   const std::vector<double>& grey() const { return grey_; }
 
  private:
+  // AdjustmentOptions::stall_iterations: sigma0 flat and displacements not shrinking.
+  bool Stalled(const std::vector<IterationReport>& iterations) const;
   void BuildTopologyTables();
   void BuildPattern();
   long long CastAll(std::vector<std::vector<PixelObservation>>* casts);
   void InitialiseGrey(const std::vector<std::vector<PixelObservation>>& casts);
-  double Accumulate(const std::vector<std::vector<PixelObservation>>& casts,
-                    Eigen::VectorXd* rhs, long long* count);
+  // scale: the previous iteration's sigma0 for the robust weights (0: all weight 1).
+  double Accumulate(const std::vector<std::vector<PixelObservation>>& casts, double scale,
+                    Eigen::VectorXd* rhs, long long* count, long long* rejected);
   double AccumulateCurvature(Eigen::VectorXd* rhs, long long* count);
   std::vector<double> CurrentCurvatures() const;
 
