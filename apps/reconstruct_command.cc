@@ -120,7 +120,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   ProductOptions products;
   products.glb = !args.no_glb;
   products.vrml = !args.no_vrml;
-  products.rasters = !args.no_rasters;
+  products.ortho = products.dsm = products.sigma = !args.no_rasters;
   const std::vector<std::string> files = WriteProducts(result, block, args.out, products);
   std::string list;
   for (const auto& f : files) list += " " + f;
