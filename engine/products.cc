@@ -84,7 +84,13 @@ ProductSurface MakeProductSurface(const Reconstruction& r, const ImageBlock& blo
   s.channels = r.channels == 1 ? 1 : 3;
   s.grey.reserve(r.tessellation.points.size() * s.channels);
   for (size_t p = 0; p < r.tessellation.points.size(); ++p) {
-    for (int c = 0; c < s.channels; ++c) s.grey.push_back(r.grey[p * r.channels + c]);
+    // Clamped to the 8-bit range every product stores (PLY and atlas colours, the 8-bit
+    // orthophoto): a value outside it (an extrapolating grey node at a poorly seen
+    // border) would otherwise pull the orthophoto's interpolation differently from the
+    // re-export of surface.ply.
+    for (int c = 0; c < s.channels; ++c) {
+      s.grey.push_back(std::clamp(r.grey[p * r.channels + c], 0.0, 255.0));
+    }
   }
   s.sigma = NodeSigma(r);
   s.views = NodeViews(r);
