@@ -124,12 +124,13 @@ PreviewImage RenderPreview(const ExportSurface& surface, const PreviewOptions& o
     const Eigen::Vector3i& tri = surface.triangles[t];
     Eigen::Vector3d n = (surface.vertices[tri[1]] - surface.vertices[tri[0]])
                             .cross(surface.vertices[tri[2]] - surface.vertices[tri[0]]);
-    if (n.squaredNorm() == 0.0) return static_cast<double>(LinearToSrgb8(255.0f * options.ambient));
+    if (n.squaredNorm() == 0.0) return 255.0 * options.ambient;
     n.normalize();
     if (n.dot(toward) < 0.0) n = -n;  // the side the viewer sees
-    const double lambert = options.ambient + (1.0 - options.ambient) * std::max(0.0, n.dot(light));
-    // Lambert is linear in radiance: encode for the display like any rendered image.
-    return static_cast<double>(LinearToSrgb8(static_cast<float>(255.0 * lambert)));
+    // Shown directly as the display value, as a GIS hillshade does: an sRGB-encoded
+    // (physically displayed) Lambert term pushes every lit slope towards white and
+    // hides the shape.
+    return 255.0 * (options.ambient + (1.0 - options.ambient) * std::max(0.0, n.dot(light)));
   };
   auto textured = [&](int t, float w1, float w2, int c) {
     if (!coloured) return 128.0;

@@ -29,7 +29,7 @@ struct PreviewOptions {
   // Where the light comes from (shaded panel): north-west, as on shaded relief maps.
   double light_azimuth_deg = 315.0;
   double light_elevation_deg = 45.0;
-  double ambient = 0.2;     // shaded panel: ambient + (1 - ambient) * max(0, n.l)
+  double ambient = 0.15;    // shaded panel: 255 * (ambient + (1 - ambient) * max(0, n.l))
   int supersampling = 3;    // samples per pixel side (anti-aliasing)
   int margin_px = 10;       // free border around the surface in each panel
   // Not a grey, so that no surface pixel of a grey surface equals it exactly.

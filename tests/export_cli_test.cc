@@ -19,6 +19,7 @@
 #include "io/image_io.h"
 #include "io/products_dir_for_testing.h"
 #include "io/ply_io.h"
+#include "io/preview.h"
 #include "io/raster_io.h"
 
 namespace facets {
@@ -96,6 +97,24 @@ TEST(ExportCli, ReExportsAReconstructedRun) {
   const ImagePlanes preview = ReadImage((exported / "preview.png").string());
   EXPECT_EQ(preview.width, 1200);
   EXPECT_EQ(preview.height, 500);
+  // Both panels show the surface: background (PreviewOptions::background) well below
+  // the whole panel (a square roof seen diagonally leaves about 2/3 of it).
+  const PreviewOptions preview_options;
+  for (int panel = 0; panel < 2; ++panel) {
+    long long background = 0;
+    for (int y = 0; y < preview.height; ++y) {
+      for (int x = panel * 600; x < (panel + 1) * 600; ++x) {
+        bool is_background = true;
+        for (int c = 0; c < 3; ++c) {
+          is_background = is_background && preview.at(c, x, y) == preview_options.background[c];
+        }
+        background += is_background;
+      }
+    }
+    const double share = background / (600.0 * preview.height);
+    std::cout << "preview panel " << panel << ": background share " << share << "\n";
+    EXPECT_LT(share, 0.75);
+  }
   std::cout << "export: " << again.vertices.size() << " PLY vertices, " << glb_again
             << " glb vertices, DSM " << dsm.grid.width << " x " << dsm.grid.height
             << " identical, orthophoto max difference " << max_grey << " grey values\n";
