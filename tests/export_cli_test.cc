@@ -7,6 +7,7 @@
 // (surface.ply stores the grey values as 8 bit), the preview with its size. Bad run
 // folders give a clear error and exit status 1.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <tiny_gltf.h>
 
 #include <cstdlib>
