@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "apps/evaluate_command.h"
+#include "apps/export_command.h"
 #include "apps/reconstruct_command.h"
 #include "apps/render_command.h"
 
@@ -12,6 +13,7 @@ int main(int argc, char** argv) {
   facets::AddRenderCommand(app);
   facets::AddEvaluateCommand(app);
   facets::AddReconstructCommand(app);
+  facets::AddExportCommand(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
 }

@@ -48,7 +48,7 @@ struct ReconstructArgs {
   bool tiled_images = false;
   double image_memory_mb = 1024.0;
   int threads = 0;
-  bool no_glb = false, no_vrml = false, no_rasters = false;
+  bool no_glb = false, no_vrml = false, no_rasters = false, no_preview = false;
 };
 
 void RunReconstruct(const ReconstructArgs& args) {
@@ -124,7 +124,8 @@ void RunReconstruct(const ReconstructArgs& args) {
   ProductOptions products;
   products.glb = !args.no_glb;
   products.vrml = !args.no_vrml;
-  products.rasters = !args.no_rasters;
+  products.ortho = products.dsm = products.sigma = !args.no_rasters;
+  products.preview = !args.no_preview;
   const std::vector<std::string> files = WriteProducts(result, block, args.out, products);
   std::string list;
   for (const auto& f : files) list += " " + f;
@@ -178,6 +179,7 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_flag("--no-glb", args->no_glb, "do not write surface.glb");
   sub->add_flag("--no-vrml", args->no_vrml, "do not write surface.wrl");
   sub->add_flag("--no-rasters", args->no_rasters, "do not write ortho.tif, dsm.tif, sigma.tif");
+  sub->add_flag("--no-preview", args->no_preview, "do not write preview.png");
   sub->callback([args] {
     try {
       RunReconstruct(*args);

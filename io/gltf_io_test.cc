@@ -311,6 +311,58 @@ TEST(GltfIo, LargeMeshSplitsInto16BitPrimitivesOrUses32BitIndices) {
   WriteGlb((dir / "large_split_textured.glb").string(), surface);
 }
 
+// Issue 8 round trip with UTM-sized coordinates: origin (500000, 5400000, 300). The
+// .glb keeps float32 positions relative to the origin and the origin as the double
+// translation of node "facets_origin" (and in the extras); reading both back and
+// adding them must give the global positions to 1 mm (float32 of local coordinates
+// within +-20 m: a few micrometres). Vertex colours: one glTF vertex per surface vertex.
+TEST(GltfIo, UtmOriginRoundTripToAMillimetre) {
+  ExportSurface surface = GridSurface(60, 50, 1);
+  const Eigen::Vector3d origin(500000.0, 5400000.0, 300.0);
+  std::vector<Eigen::Vector3d> global;
+  for (Eigen::Vector3d& v : surface.vertices) {
+    global.push_back(origin + v + Eigen::Vector3d(0.0001234, 0.0005678, 0.0));
+    v = global.back() - origin;
+  }
+  surface.origin = origin;
+  surface.crs = "EPSG:25832";
+  for (size_t i = 0; i < surface.views.size(); ++i) surface.views[i] = static_cast<int>(i);
+  GlbOptions options;
+  options.color_mode = GlbColorMode::kVertexColors;
+  const fs::path path = ProductsDir() / "grid_utm_vertex_colors.glb";
+  WriteGlb(path.string(), surface, options);
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const tinygltf::Model model = Load(bytes);
+
+  const tinygltf::Node& node = MeshNode(model);
+  EXPECT_EQ(node.name, "facets_origin");
+  ASSERT_EQ(node.translation.size(), 3u);
+  const Eigen::Vector3d file_origin(node.translation[0], node.translation[1], node.translation[2]);
+  EXPECT_EQ(file_origin, origin);
+  const tinygltf::Value& geo = model.asset.extras.Get("facets");
+  EXPECT_EQ(geo.Get("crs").Get<std::string>(), "EPSG:25832");
+  for (int c = 0; c < 3; ++c) EXPECT_EQ(geo.Get("origin").Get(c).GetNumberAsDouble(), origin[c]);
+
+  size_t vertices = 0;
+  double max_error = 0;
+  for (const tinygltf::Primitive& p : model.meshes.at(0).primitives) {
+    const std::vector<double> pos = Values(model, p.attributes.at("POSITION"));
+    const std::vector<double> id = Values(model, p.attributes.at("_VIEWS"));
+    vertices += id.size();
+    for (size_t i = 0; i < id.size(); ++i) {
+      const Eigen::Vector3d back = file_origin + Eigen::Vector3d(pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]);
+      max_error = std::max(max_error, (back - global[static_cast<size_t>(id[i])]).norm());
+    }
+  }
+  std::cout << "UTM glb round trip: " << vertices << " vertices (" << surface.vertices.size()
+            << " written), origin " << file_origin.transpose() << ", max global position error "
+            << max_error << " m\n";
+  EXPECT_EQ(vertices, surface.vertices.size());
+  EXPECT_LT(max_error, 1e-3);
+  EXPECT_LT(max_error, 1e-5);  // what float32 of local coordinates gives
+}
+
 TEST(GltfIo, GeometryOnlyAndZUpOptions) {
   ExportSurface surface = GridSurface(10, 8, 1);
   surface.colors.clear();

@@ -14,6 +14,7 @@
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 
 #include "io/atomic_file.h"
 
@@ -226,6 +227,45 @@ void MeshData::Check(const std::string& source_name) const {
   }
 }
 
+namespace {
+
+// "comment facets_origin X Y Z" / "comment facets_crs CRS" (see MeshData::origin); any
+// other comment is ignored.
+void ReadFacetsComment(std::istringstream& ls, const std::string& src, const std::string& where,
+                       Eigen::Vector3d* origin, std::string* crs) {
+  std::string key;
+  ls >> key;
+  if (key == "facets_origin") {
+    for (int c = 0; c < 3; ++c) ls >> (*origin)[c];
+    if (!ls || !origin->allFinite()) Fail(src, where + "malformed facets_origin comment");
+  } else if (key == "facets_crs") {
+    std::getline(ls >> std::ws, *crs);
+    if (crs->empty()) Fail(src, where + "empty facets_crs comment");
+  }
+}
+
+void WriteFacetsComments(const Eigen::Vector3d& origin, const std::string& crs,
+                         const std::string& path, std::ostringstream& header) {
+  if (!origin.allFinite()) throw std::invalid_argument(path + ": origin is not finite");
+  if (crs.find('\n') != std::string::npos) {
+    throw std::invalid_argument(path + ": crs must be one line");
+  }
+  if (!origin.isZero(0.0)) {
+    header << "comment facets_origin";
+    for (int c = 0; c < 3; ++c) {
+      // Shortest fixed-point decimals that read back to the same double.
+      char buffer[400];
+      const auto result =
+          std::to_chars(buffer, buffer + sizeof(buffer), origin[c], std::chars_format::fixed);
+      header << ' ' << std::string_view(buffer, result.ptr - buffer);
+    }
+    header << "\n";
+  }
+  if (!crs.empty()) header << "comment facets_crs " << crs << "\n";
+}
+
+}  // namespace
+
 MeshData ReadPly(std::istream& in, const std::string& source_name) {
   const std::string& src = source_name;
   std::string line;
@@ -240,6 +280,8 @@ MeshData ReadPly(std::istream& in, const std::string& source_name) {
   if (!next_header_line() || Trim(line) != "ply") Fail(src, "not a PLY file (first line is not 'ply')");
 
   PlyFormat format = PlyFormat::kAscii;
+  Eigen::Vector3d mesh_origin = Eigen::Vector3d::Zero();
+  std::string mesh_crs;
   bool have_format = false;
   std::vector<PlyElement> elements;
   bool header_done = false;
@@ -249,7 +291,11 @@ MeshData ReadPly(std::istream& in, const std::string& source_name) {
     std::string keyword;
     ls >> keyword;
     const std::string where = "line " + std::to_string(line_number) + ": ";
-    if (keyword.empty() || keyword == "comment" || keyword == "obj_info") continue;
+    if (keyword == "comment") {
+      ReadFacetsComment(ls, src, where, &mesh_origin, &mesh_crs);
+      continue;
+    }
+    if (keyword.empty() || keyword == "obj_info") continue;
     if (keyword == "end_header") {
       header_done = true;
       break;
@@ -307,6 +353,8 @@ MeshData ReadPly(std::istream& in, const std::string& source_name) {
   if (!have_format) Fail(src, "header has no format line");
 
   MeshData mesh;
+  mesh.origin = mesh_origin;
+  mesh.crs = mesh_crs;
   const bool binary = format != PlyFormat::kAscii;
   const bool swap = format == PlyFormat::kBinaryBig;
   std::string data;
@@ -483,8 +531,9 @@ void WritePly(const std::string& path, const MeshData& mesh) {
 
   std::ostringstream header;
   header.imbue(std::locale::classic());
-  header << "ply\nformat binary_little_endian 1.0\ncomment written by Facets\n"
-         << "element vertex " << mesh.vertices.size() << "\n"
+  header << "ply\nformat binary_little_endian 1.0\ncomment written by Facets\n";
+  WriteFacetsComments(mesh.origin, mesh.crs, path, header);
+  header << "element vertex " << mesh.vertices.size() << "\n"
          << "property double x\nproperty double y\nproperty double z\n";
   if (normals) header << "property float nx\nproperty float ny\nproperty float nz\n";
   if (colors) header << "property uchar red\nproperty uchar green\nproperty uchar blue\n";

@@ -31,6 +31,13 @@ struct MeshData {
   std::vector<int> views;               // number of images that saw the vertex
   // Optional per-face attribute: empty, or one entry per face (region label).
   std::vector<int> face_labels;
+  // Where the local frame sits on the earth: global = origin + local; crs "" = unknown
+  // (anything GDAL reads, e.g. "EPSG:25832"). Kept in the PLY header as the comments
+  // "comment facets_origin X Y Z" and "comment facets_crs CRS", so a run's surface.ply
+  // alone can be re-exported georeferenced (facets export) and other tools still read
+  // the file (comments are ignored by every PLY reader).
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  std::string crs;
 
   // Throws std::invalid_argument (message starts with `source_name`) when an attribute
   // vector has the wrong size or a face index is out of range.
@@ -44,7 +51,8 @@ MeshData ReadPly(std::istream& in, const std::string& source_name = "<stream>");
 
 // binary_little_endian, double x y z, float nx ny nz, uchar red green blue, float sigma,
 // int views, face: list uchar int vertex_indices + int label. Optional attributes are
-// written only when present. Colours are rounded and clamped to 0..255. Writes to
+// written only when present; the origin (when not zero, exact decimals) and the crs
+// (when given) as header comments. Colours are rounded and clamped to 0..255. Writes to
 // path + ".tmp" and renames at the end: never a half-written file.
 void WritePly(const std::string& path, const MeshData& mesh);
 

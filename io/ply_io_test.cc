@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -73,6 +74,62 @@ TEST(PlyIoTest, BinaryRoundTripIsExactForEveryAttribute) {
   std::cout << "round trip: " << back.vertices.size() << " vertices, " << back.faces.size()
             << " faces, max coordinate difference " << max_diff << " m, file size "
             << std::filesystem::file_size(path) << " bytes\n";
+  std::filesystem::remove_all(dir);
+}
+
+// Issue 8 round trip with UTM-sized coordinates: a surface around (500000, 5400000,
+// 300) in local coordinates with that origin and a CRS. The file keeps the local
+// doubles and the origin (header comment, exact decimals), so adding the origin back
+// gives the global positions; the bound is 1 mm, the result is exact.
+TEST(PlyIoTest, UtmOriginAndCrsRoundTrip) {
+  const auto dir = TempDir("utm");
+  const std::string path = (dir / "surface.ply").string();
+  MeshData mesh;
+  mesh.origin = Eigen::Vector3d(500000.0, 5400000.0, 300.0);
+  mesh.crs = "EPSG:25832";
+  std::vector<Eigen::Vector3d> global;
+  for (int j = 0; j < 30; ++j) {
+    for (int i = 0; i < 40; ++i) {
+      // Global positions with sub-millimetre decimals, 0.37 m apart, up to ~15 m from the origin.
+      global.emplace_back(500000.0 + 0.37 * i - 7.123456, 5400000.0 + 0.37 * j - 5.654321,
+                          300.0 + std::sin(0.2 * i) * std::cos(0.3 * j) + 0.0001234);
+      mesh.vertices.push_back(global.back() - mesh.origin);
+    }
+  }
+  for (int j = 0; j + 1 < 30; ++j) {
+    for (int i = 0; i + 1 < 40; ++i) {
+      const int a = j * 40 + i;
+      mesh.faces.emplace_back(a, a + 1, a + 41);
+      mesh.faces.emplace_back(a, a + 41, a + 40);
+    }
+  }
+  WritePly(path, mesh);
+  const MeshData back = ReadPly(path);
+  ASSERT_EQ(back.vertices.size(), mesh.vertices.size());
+  EXPECT_EQ(back.faces, mesh.faces);
+  EXPECT_EQ(back.origin, mesh.origin);
+  EXPECT_EQ(back.crs, mesh.crs);
+  double max_error = 0;
+  for (size_t i = 0; i < global.size(); ++i) {
+    max_error = std::max(max_error, (back.origin + back.vertices[i] - global[i]).norm());
+  }
+  std::cout << "UTM round trip: " << back.vertices.size() << " vertices, origin "
+            << back.origin.transpose() << ", max global position error " << max_error << " m\n";
+  EXPECT_LT(max_error, 1e-3);
+
+  // A file without the comments (another tool's) reads with origin zero and no CRS; a
+  // malformed origin comment is an error naming the file.
+  std::istringstream plain("ply\nformat ascii 1.0\ncomment other tool\nelement vertex 1\n"
+                           "property float x\nproperty float y\nproperty float z\n"
+                           "end_header\n1 2 3\n");
+  const MeshData other = ReadPly(plain, "other.ply");
+  EXPECT_EQ(other.origin, Eigen::Vector3d::Zero());
+  EXPECT_EQ(other.crs, "");
+  std::istringstream bad("ply\nformat ascii 1.0\ncomment facets_origin 1 2\nelement vertex 0\n"
+                         "property float x\nproperty float y\nproperty float z\nend_header\n");
+  const std::string message = ErrorOf([&] { ReadPly(bad, "bad.ply"); });
+  EXPECT_NE(message.find("bad.ply"), std::string::npos) << message;
+  EXPECT_NE(message.find("facets_origin"), std::string::npos) << message;
   std::filesystem::remove_all(dir);
 }
 

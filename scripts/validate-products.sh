@@ -9,8 +9,9 @@
 #   scripts/validate-products.sh [--build DIR] [FILE_OR_FOLDER ...]
 # With files or folders: validates those (folders: every .glb and .wrl inside).
 # Without: builds the export tests in DIR (default: ./build, configured if needed), runs
-# them with FACETS_PRODUCTS_DIR=DIR/products (they write the products of bundled scenes
-# and synthetic meshes there) and validates every file in that folder.
+# them with FACETS_PRODUCTS_DIR=DIR/products (they write the products of bundled scenes,
+# synthetic meshes and a small reconstructed run, as `facets reconstruct` wrote them and
+# as `facets export` re-wrote them) and validates every file in that folder.
 #
 # The validator is installed by npm into DIR/node_tools (gitignored; the npm registry
 # is the only non-Debian download). tovrmlx3d and node/npm come from
@@ -26,7 +27,7 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --build) [ $# -ge 2 ] || { echo "validate-products: --build needs a folder" >&2; exit 2; }
              build=$(realpath -m "$2"); shift 2 ;;
-    -h|--help) sed -n '2,21p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
     *) inputs+=("$(realpath -m "$1")"); shift ;;
   esac
 done
@@ -48,9 +49,11 @@ if [ ${#inputs[@]} -eq 0 ]; then
       die "cannot configure $build"
   fi
   targets=(facets_export_tests)
-  if grep -q "facets_export_products_tests" "$root/tests/CMakeLists.txt" 2>/dev/null; then
-    targets+=(facets_export_products_tests)
-  fi
+  # Bundled scenes' truth meshes; and a small `facets reconstruct` run with its
+  # products re-written by `facets export` (both copies are validated).
+  for t in facets_export_products_tests facets_export_cli_tests; do
+    if grep -q "$t" "$root/tests/CMakeLists.txt" 2>/dev/null; then targets+=("$t"); fi
+  done
   cmake --build "$build" --target "${targets[@]}" -j"$(nproc 2>/dev/null || echo 2)" >/dev/null ||
     die "cannot build ${targets[*]} in $build"
   rm -rf "$products"
