@@ -33,8 +33,6 @@ struct ReconstructArgs {
   std::string filter = "binomial5";
   double break_off = AdjustmentOptions().break_off;
   int max_iterations = AdjustmentOptions().max_iterations;
-  double reject_sigma = AdjustmentOptions().reject_sigma;
-  double huber_sigma = AdjustmentOptions().huber_sigma;
   double crease_angle = AdjustmentOptions().crease_angle_deg;
   std::optional<double> start_height;
   int lifting_steps = 0;
@@ -86,8 +84,6 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.adjustment.radiometry = RadiometricModelFromName(args.radiometry);
   options.adjustment.break_off = args.break_off;
   options.adjustment.max_iterations = args.max_iterations;
-  options.adjustment.reject_sigma = args.reject_sigma;
-  options.adjustment.huber_sigma = args.huber_sigma;
   options.adjustment.crease_angle_deg = args.crease_angle;
   options.start_height = args.start_height;
   options.lifting_steps = args.lifting_steps;
@@ -159,10 +155,6 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--filter", args->filter, "pyramid filter: binomial3 | binomial5 | meer13")->capture_default_str();
   sub->add_option("--break-off", args->break_off, "largest displacement at the finest level (m)")->capture_default_str();
   sub->add_option("--max-iterations", args->max_iterations, "per level")->capture_default_str();
-  sub->add_option("--reject-sigma", args->reject_sigma,
-                  "pixels with residuals above this many sigma0 get weight 0 (0 = off)")->capture_default_str();
-  sub->add_option("--huber-sigma", args->huber_sigma,
-                  "Huber down-weighting of residuals above this many sigma0 (0 = off)")->capture_default_str();
   sub->add_option("--crease-angle", args->crease_angle, "crease detection angle (deg); 180 = pure G1")->capture_default_str();
   sub->add_option("--start-height", args->start_height, "height of the start plane (local Z)");
   sub->add_option("--lifting-steps", args->lifting_steps, "object lifting: start heights to try (0 = off)")->capture_default_str();

@@ -46,11 +46,6 @@ void AdjustmentOptions::Check() const {
   if (reference_image < 0) fail("reference_image must be >= 0");
   if (!(break_off > 0.0)) fail("break_off must be > 0");
   if (max_iterations < 1) fail("max_iterations must be >= 1");
-  if (!(reject_sigma >= 0.0)) fail("reject_sigma must be >= 0");
-  if (!(huber_sigma >= 0.0)) fail("huber_sigma must be >= 0");
-  if (huber_sigma > 0.0 && reject_sigma > 0.0 && huber_sigma >= reject_sigma) {
-    fail("huber_sigma must be below reject_sigma");
-  }
   if (stall_iterations < 0) fail("stall_iterations must be >= 0");
   if (!(stall_ratio >= 0.0)) fail("stall_ratio must be >= 0");
   if (!(max_step >= 0.0)) fail("max_step must be >= 0");

@@ -69,15 +69,6 @@ struct AdjustmentOptions {
   // (mesh/creases.h). 180 = a G1 surface everywhere.
   double crease_angle_deg = 20.0;
 
-  // Robust estimation (DESIGN.md section 6 assumes Gaussian grey-value noise; real
-  // images and occlusion mistakes are not): from the second iteration on, a pixel whose
-  // residual exceeds reject_sigma times the previous iteration's sigma0 gets weight 0
-  // (moving cars, specular glass, a ray that hits a wall the surface does not have
-  // yet), and above huber_sigma times sigma0 the Huber weight k sigma0 / |v|. The
-  // rejected share is reported. 0 = off. Gaussian noise loses 6e-7 of its pixels at 5.
-  double reject_sigma = 5.0;
-  double huber_sigma = 0.0;
-
   // Rays at |cos incidence| below this are no observation.
   double min_cos_incidence = 0.1;
   // Tiny ridge on grey and radiometric unknowns (relative to the mean diagonal) so

@@ -230,7 +230,6 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
     any = true;
     s.converged = s.converged && r.converged;
     s.observations += r.observations;
-    s.rejected += r.rejected;
     s.pseudo_observations += r.pseudo_observations;
     s.unknowns += r.unknowns;
     s.redundancy += r.redundancy;

@@ -106,13 +106,6 @@ void ReconstructionOptions::Check() const {
   windows.Check();
 }
 
-namespace {
-double RejectedShare(const WindowReport& w) {
-  const long long all = w.observations + w.rejected;
-  return all > 0 ? static_cast<double>(w.rejected) / all : 0.0;
-}
-}  // namespace
-
 std::string ReconstructionReport::BriefReport() const {
   std::ostringstream out;
   out << "start height " << start_height << " m; ";
@@ -152,8 +145,6 @@ std::string ReconstructionReport::Json() const {
                      {"iterations", w.iterations.size()},
                      {"cg_iterations", w.cg_iterations_total},
                      {"observations", w.observations},
-                     {"rejected", w.rejected},
-                     {"rejected_share", RejectedShare(w)},
                      {"pseudo_observations", w.pseudo_observations},
                      {"unknowns", w.unknowns},
                      {"redundancy", w.redundancy},
@@ -166,7 +157,6 @@ std::string ReconstructionReport::Json() const {
         window["per_iteration"].push_back(
             {{"iteration", it.iteration},
              {"observations", it.observations},
-             {"rejected", it.rejected},
              {"cg_iterations", it.cg_iterations},
              {"sigma0", it.sigma0},
              {"max_dn", {it.max_dn_interior, it.max_dn_border, it.max_dn_corner}},
@@ -196,8 +186,7 @@ std::string ReconstructionReport::Json() const {
                  {"window_iterations", iterations},
                  {"cg_iterations", cg},
                  {"observations_last_iterations", observations},
-                 {"sigma0_finest", levels.empty() ? 0.0 : levels.back().window.sigma0},
-                 {"rejected_share_finest", levels.empty() ? 0.0 : RejectedShare(levels.back().window)}};
+                 {"sigma0_finest", levels.empty() ? 0.0 : levels.back().window.sigma0}};
   return j.dump(2);
 }
 
@@ -327,8 +316,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     level_report.window_groups = adjusted.groups;
     say("  level " + std::to_string(level) + ": " + std::to_string(level_report.windows.size()) +
         " windows in " + std::to_string(level_report.window_groups) + " groups, sigma0 " +
-        std::to_string(level_report.window.sigma0) + ", rejected " +
-        std::to_string(100.0 * RejectedShare(level_report.window)) + " %");
+        std::to_string(level_report.window.sigma0));
     for (const auto& it : level_report.windows.size() == 1 ? level_report.window.iterations
                                                             : std::vector<IterationReport>{}) {
       say("  level " + std::to_string(level) + " iteration " + std::to_string(it.iteration) +

@@ -52,7 +52,6 @@ struct Partial {
   Eigen::VectorXd rhs;
   double lpl = 0.0;
   long long count = 0;
-  long long rejected = 0;
 };
 
 }  // namespace
@@ -287,10 +286,7 @@ void WindowAdjustment::InitialiseGrey(const std::vector<std::vector<PixelObserva
 }
 
 double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservation>>& casts,
-                                    double scale, Eigen::VectorXd* rhs, long long* count,
-                                    long long* rejected) {
-  const double reject_bound = options_.reject_sigma * scale;
-  const double huber_bound = options_.huber_sigma * scale;
+                                    Eigen::VectorXd* rhs, long long* count) {
   const auto& row_ptr = normal_.row_ptr();
   const int64_t nnz = normal_.nonZeros();
   const auto& local_nodes = FacetLocalNodes();
@@ -333,19 +329,8 @@ double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservati
               Linearise(ray, facet, obs.u, obs.v, Radiometry{rad[0], rad[1]});
           if (!lin.valid) continue;
           const double g = pixels.at(c, obs.x, obs.y);
-          const double l_raw = g - lin.predicted;
-          if (reject_bound > 0.0 && std::abs(l_raw) > reject_bound) {
-            ++p.rejected;
-            continue;
-          }
-          // Huber: weight k s / |v| applied as sqrt(w) to the row, so N and n stay sums of
-          // products of one row.
-          const double root_w = huber_bound > 0.0 && std::abs(l_raw) > huber_bound
-                                    ? std::sqrt(huber_bound / std::abs(l_raw))
-                                    : 1.0;
-          const double l = root_w * l_raw;
-          const double a[6] = {root_w * lin.dn[0], root_w * lin.dn[1], root_w * lin.dn[2],
-                               root_w * lin.grey[0], root_w * lin.grey[1], root_w * lin.grey[2]};
+          const double l = g - lin.predicted;
+          const double a[6] = {lin.dn[0], lin.dn[1], lin.dn[2], lin.grey[0], lin.grey[1], lin.grey[2]};
           const int64_t* table = &slots_[(static_cast<size_t>(f) * channels_ + c) * kLocal * kLocal];
           int unknown[6];
           for (int i = 0; i < 3; ++i) unknown[i] = vertex_unknown_[face_vertices_[f][i]];
@@ -360,7 +345,7 @@ double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservati
             }
           }
           const std::array<int, 2>& rad_unknown = rad_unknown_[k][c];
-          const double a_rad[2] = {root_w * lin.h0, root_w * lin.h1};
+          const double a_rad[2] = {lin.h0, lin.h1};
           for (int r = 0; r < 2; ++r) {
             const int ur = rad_unknown[r];
             if (ur < 0) continue;
@@ -388,7 +373,6 @@ double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservati
   *rhs = Eigen::VectorXd::Zero(num_unknowns_);
   double lpl = 0.0;
   *count = 0;
-  *rejected = 0;
   for (const Partial& p : partials) {
     tbb::parallel_for(tbb::blocked_range<int64_t>(0, nnz, 1 << 16),
                       [&](const tbb::blocked_range<int64_t>& range) {
@@ -397,7 +381,6 @@ double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservati
     *rhs += p.rhs;
     lpl += p.lpl;
     *count += p.count;
-    *rejected += p.rejected;
   }
   return lpl;
 }
@@ -502,10 +485,8 @@ WindowReport WindowAdjustment::Run() {
     if (grey_.empty() || (iteration == 1 && !grey_given_)) InitialiseGrey(casts);
 
     start = std::chrono::steady_clock::now();
-    long long count = 0, pseudo = 0, rejected = 0;
-    const double robust_scale = report.iterations.empty() ? 0.0 : report.iterations.back().sigma0;
-    double lpl = Accumulate(casts, robust_scale, &rhs, &count, &rejected);
-    it.rejected = rejected;
+    long long count = 0, pseudo = 0;
+    double lpl = Accumulate(casts, &rhs, &count);
     lpl += AccumulateCurvature(&rhs, &pseudo);
     // Ridge: keeps unknowns without any observation (grey nodes nobody sees, vertices
     // outside every view) at their value instead of making N singular.
@@ -531,7 +512,6 @@ WindowReport WindowAdjustment::Run() {
     const double vpv = std::max(lpl - solution.dot(rhs), 0.0);
     it.sigma0 = redundancy > 0 ? std::sqrt(vpv / redundancy) : 0.0;
     report.observations = count;
-    report.rejected = rejected;
     report.pseudo_observations = pseudo;
     report.unknowns = determined;
     report.redundancy = redundancy;

@@ -48,7 +48,6 @@ struct IterationReport {
   long long observations = 0;
   int cg_iterations = 0;
   double sigma0 = 0.0;           // of this linearisation, grey values
-  long long rejected = 0;        // pixels given weight 0 (AdjustmentOptions::reject_sigma)
   double max_dn_interior = 0.0;  // object units
   double max_dn_border = 0.0;
   double max_dn_corner = 0.0;
@@ -64,7 +63,6 @@ struct WindowReport {
   bool stalled = false;  // stopped by AdjustmentOptions::stall_iterations
   double sigma0 = 0.0;  // grey values, of the last linearisation
   long long observations = 0;
-  long long rejected = 0;  // of the last iteration, not counted in observations
   long long pseudo_observations = 0;
   int unknowns = 0;
   long long redundancy = 0;
@@ -122,9 +120,8 @@ class WindowAdjustment {
   void BuildPattern();
   long long CastAll(std::vector<std::vector<PixelObservation>>* casts);
   void InitialiseGrey(const std::vector<std::vector<PixelObservation>>& casts);
-  // scale: the previous iteration's sigma0 for the robust weights (0: all weight 1).
-  double Accumulate(const std::vector<std::vector<PixelObservation>>& casts, double scale,
-                    Eigen::VectorXd* rhs, long long* count, long long* rejected);
+  double Accumulate(const std::vector<std::vector<PixelObservation>>& casts,
+                    Eigen::VectorXd* rhs, long long* count);
   double AccumulateCurvature(Eigen::VectorXd* rhs, long long* count);
   std::vector<double> CurrentCurvatures() const;
 
