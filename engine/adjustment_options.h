@@ -53,7 +53,8 @@ struct AdjustmentOptions {
   int max_iterations = 30;
   // Stall stop: the iteration also ends (as stalled, not converged) when, over the last
   // stall_iterations iterations, sigma0 fell by less than stall_ratio (relative) and
-  // the largest interior displacement did not shrink below 70 %. A few vertices that
+  // the largest interior displacement did not shrink below 70 % and is still above 4x
+  // break_off. A few vertices that
   // oscillate at a wall or ridge the level cannot represent would otherwise run every
   // window to max_iterations without changing the surface (the block scene: 60
   // iterations per window at sigma0 flat to 0.1 %). A converging run's displacements

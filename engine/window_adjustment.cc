@@ -64,7 +64,10 @@ bool WindowAdjustment::Stalled(const std::vector<IterationReport>& iterations) c
   const IterationReport& now = iterations[n - 1];
   const bool flat = then.sigma0 - now.sigma0 < options_.stall_ratio * then.sigma0;
   const bool not_shrinking = now.max_dn_interior >= 0.7 * then.max_dn_interior;
-  return flat && not_shrinking;
+  // Steps within a few break-off bounds are noise around a solution that will
+  // converge: only steps well above the bound count as a stall.
+  const bool large = now.max_dn_interior > 4.0 * options_.break_off;
+  return flat && not_shrinking && large;
 }
 
 std::string WindowReport::BriefReport() const {
