@@ -113,8 +113,9 @@ class PointBuckets {
 // centimetres, so the agreeing set wins (the median lands in between). A plane and not
 // a level, so a slope does not bias the node towards the side with more points (or the
 // one-sided neighbourhood at the border). Empty when fewer than min_points agree.
+// `offset` receives the distance from (x, y) to the inliers' centroid.
 std::optional<double> LocalRobustHeight(const std::vector<Eigen::Vector3d>& near, double x, double y,
-                                        const TiePointStartOptions& options) {
+                                        const TiePointStartOptions& options, double* offset) {
   const int n = static_cast<int>(near.size());
   if (n < std::max(3, options.min_points)) return std::nullopt;
   std::vector<Eigen::Vector3d> local;
@@ -177,6 +178,14 @@ std::optional<double> LocalRobustHeight(const std::vector<Eigen::Vector3d>& near
     best_plane = refit;
     if (inliers_of(best_plane, &best_use) < options.min_points) return std::nullopt;
   }
+  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+  int kept = 0;
+  for (int i = 0; i < n; ++i) {
+    if (!best_use[i]) continue;
+    centroid += local[i].head<2>();
+    ++kept;
+  }
+  *offset = (centroid / kept).norm();
   return best_plane[0];
 }
 
@@ -275,8 +284,14 @@ TiePointHeightGrid FitTiePointHeights(const std::vector<Eigen::Vector3d>& all_po
            radius *= 2) {
         const std::vector<Eigen::Vector3d> near = buckets.PointsNear(x, y, radius);
         if (static_cast<int>(near.size()) < options.min_points) continue;
-        const std::optional<double> fitted = LocalRobustHeight(near, x, y, options);
+        double offset = 0.0;
+        const std::optional<double> fitted = LocalRobustHeight(near, x, y, options, &offset);
         if (!fitted) continue;
+        // All agreeing points off to one side (the edge of a hole): the plane would be
+        // extrapolated; a larger neighbourhood may take the other side in, else the node
+        // takes the robust plane. (At the region's border a half disc puts the centroid
+        // at 0.42 radius, a quarter disc at 0.6.)
+        if (offset > 0.7 * radius) continue;
         z = *fitted;
         ++r.nodes_from_points;
         break;

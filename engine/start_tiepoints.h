@@ -40,8 +40,8 @@ struct TiePointStartOptions {
   double min_tolerance = 0.3;  // m
   // A point agrees with a local plane within this distance (m): tie-point noise
   // (centimetres) plus the curvature of the terrain over a neighbourhood.
-  double consensus_tolerance = 0.3;
-  int smoothing_passes = 2;
+  double consensus_tolerance = 0.5;
+  int smoothing_passes = 1;
 
   void Check() const;  // throws std::invalid_argument naming the option
 };
