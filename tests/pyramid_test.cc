@@ -6,8 +6,11 @@
 // docs/EXPERIMENTS.md).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <iostream>
+#include <random>
 
+#include "scenes/albedo.h"
 #include "tests/pyramid_gable.h"
 
 namespace facets {
@@ -42,6 +45,40 @@ TEST(Pyramid, FiveMetresBelowConvergesOnlyWithThePyramid) {
   const bool slow = FinestIterations(without) >= 5 * FinestIterations(with);
   EXPECT_TRUE(wrong || slow) << "without the pyramid: rms " << e1.rms << " m, "
                              << FinestIterations(without) << " iterations";
+}
+
+// The scene's second texture band adds its own waves and leaves the main band as it
+// was (the seed scenes render byte-identical); a bad band names its JSON path.
+TEST(Pyramid, ExtraAlbedoBandAddsToTheMainBand) {
+  const Scene scene = LoadScene(std::string(FACETS_SOURCE_DIR) + "/scenes/data/pyramid_gable.json");
+  ASSERT_EQ(scene.albedo.extra_bands.size(), 1u);
+  AlbedoOptions main_only = scene.albedo;
+  main_only.extra_bands.clear();
+  AlbedoOptions silent = scene.albedo;
+  silent.extra_bands[0].contrast = 0.0;
+  const ProceduralAlbedo both(scene.albedo), main(main_only), zero(silent);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-50, 50);
+  double sum = 0, sum_sq = 0;
+  const int n = 4000;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d p(u(rng), u(rng), 0.1 * u(rng));
+    ASSERT_EQ(zero.Texture(p), main.Texture(p));
+    const double d = both.Texture(p) - main.Texture(p);
+    sum += d;
+    sum_sq += d * d;
+  }
+  const double sd = std::sqrt(sum_sq / n - std::pow(sum / n, 2));
+  EXPECT_NEAR(sd, scene.albedo.extra_bands[0].contrast, 0.04);  // 16 waves up to 20 m: a rough sample
+
+  nlohmann::json j = scene.json;
+  j["albedo"]["extra_bands"][0]["wavelength_max"] = 1.0;
+  try {
+    ParseScene(j, "pyramid_gable.json");
+    FAIL() << "expected an error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("/albedo/extra_bands/0/wavelength_max"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
