@@ -160,7 +160,9 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--start-height", args->start_height, "height of the start plane (local Z)");
   sub->add_option("--start", args->start,
                   "start surface: auto | plane | tiepoints (auto: tie points when >= 20 lie in the "
-                  "region and neither --start-height nor lifting is given)")->capture_default_str();
+                  "region and neither --start-height nor lifting is given)")
+      ->check(CLI::IsMember({"auto", "plane", "tiepoints"}))
+      ->capture_default_str();
   sub->add_option("--lifting-steps", args->lifting_steps, "object lifting: start heights to try (0 = off)")->capture_default_str();
   sub->add_option("--lifting-range", args->lifting_range, "object lifting: search interval (m)")->capture_default_str();
   sub->add_option("--roi", args->roi, "region of interest: xmin ymin zmin xmax ymax zmax (global)")->expected(6);

@@ -282,7 +282,17 @@ TiePointHeightGrid FitTiePointHeights(const std::vector<Eigen::Vector3d>& all_po
       z = r.plane.dot(Eigen::Vector3d(1, x, y));
       for (double radius = options.radius_nodes * step; radius <= options.max_radius_nodes * step * 1.0001;
            radius *= 2) {
-        const std::vector<Eigen::Vector3d> near = buckets.PointsNear(x, y, radius);
+        std::vector<Eigen::Vector3d> near = buckets.PointsNear(x, y, radius);
+        // Dense tie points (a full COLMAP model): the nearest kMaxNeighbours suffice and
+        // keep the consensus search bounded per node.
+        constexpr size_t kMaxNeighbours = 64;
+        if (near.size() > kMaxNeighbours) {
+          auto closer = [x, y](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+            return std::hypot(a.x() - x, a.y() - y) < std::hypot(b.x() - x, b.y() - y);
+          };
+          std::nth_element(near.begin(), near.begin() + kMaxNeighbours, near.end(), closer);
+          near.resize(kMaxNeighbours);
+        }
         if (static_cast<int>(near.size()) < options.min_points) continue;
         double offset = 0.0;
         const std::optional<double> fitted = LocalRobustHeight(near, x, y, options, &offset);
