@@ -145,6 +145,12 @@ std::optional<double> LocalRobustHeight(const std::vector<Eigen::Vector3d>& near
     }
   }
   std::vector<bool> use(n), best_use(n);
+  // Score: inliers weighted by closeness to the node, so a small roof under the node
+  // outweighs more ground points further out.
+  std::vector<double> weight(n);
+  const double r0 = options.weight_radius;
+  for (int i = 0; i < n; ++i) weight[i] = std::exp(-local[i].head<2>().squaredNorm() / (r0 * r0));
+  double best_score = 0.0;
   int best = 0;
   Eigen::Vector3d best_plane = Eigen::Vector3d::Zero();
   for (const auto& t : triples) {
@@ -165,18 +171,22 @@ std::optional<double> LocalRobustHeight(const std::vector<Eigen::Vector3d>& near
     // Steeper than 45 degrees: a wall between ground and roof points, not a surface.
     if (plane.tail<2>().norm() > 1.0) continue;
     const int kept = inliers_of(plane, &use);
-    if (kept > best) {
+    if (kept < options.min_inliers) continue;
+    double score = 0.0;
+    for (int i = 0; i < n; ++i) score += use[i] ? weight[i] : 0.0;
+    if (score > best_score) {
+      best_score = score;
       best = kept;
       best_plane = plane;
       best_use = use;
     }
   }
-  if (best < options.min_points) return std::nullopt;
+  if (best < options.min_inliers) return std::nullopt;
   for (int round = 0; round < 2; ++round) {
     const Eigen::Vector3d refit = FitPlaneZ(local, best_use);
     if (!refit.allFinite() || refit.tail<2>().norm() > 1.0) break;
     best_plane = refit;
-    if (inliers_of(best_plane, &best_use) < options.min_points) return std::nullopt;
+    if (inliers_of(best_plane, &best_use) < options.min_inliers) return std::nullopt;
   }
   Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
   int kept = 0;
@@ -272,6 +282,8 @@ TiePointHeightGrid FitTiePointHeights(const std::vector<Eigen::Vector3d>& all_po
   grid.nx = std::max(1, static_cast<int>(std::ceil(range.x() / spacing - 1e-9)));
   grid.ny = std::max(1, static_cast<int>(std::ceil(range.y() / spacing - 1e-9)));
   const double step = std::max(range.x() / grid.nx, range.y() / grid.ny);
+  TiePointStartOptions scaled = options;
+  scaled.weight_radius = options.weight_radius_nodes * step;
   const PointBuckets buckets(points, grid.min, options.radius_nodes * step);
   grid.heights.resize(static_cast<size_t>(grid.nx + 1) * (grid.ny + 1));
   for (int j = 0; j <= grid.ny; ++j) {
@@ -295,7 +307,7 @@ TiePointHeightGrid FitTiePointHeights(const std::vector<Eigen::Vector3d>& all_po
         }
         if (static_cast<int>(near.size()) < options.min_points) continue;
         double offset = 0.0;
-        const std::optional<double> fitted = LocalRobustHeight(near, x, y, options, &offset);
+        const std::optional<double> fitted = LocalRobustHeight(near, x, y, scaled, &offset);
         if (!fitted) continue;
         // All agreeing points off to one side (the edge of a hole): the plane would be
         // extrapolated; a larger neighbourhood may take the other side in, else the node

@@ -7,10 +7,11 @@
 //   1. a robust plane over all points in the region: least squares, then points
 //      beyond k x 1.4826 x MAD of the residuals dropped and the plane fitted again;
 //   2. per grid node the points within a neighbourhood (grown until it holds
-//      min_points, up to max_radius_nodes spacings): the local plane that most points
-//      agree with (within consensus_tolerance; planes through triples of the points,
-//      none steeper than 45 degrees), refitted to them; the node takes its height.
-//      On a building edge it takes the side with more points, not a wall in between;
+//      min_points, up to max_radius_nodes spacings): the local plane that at least
+//      min_inliers points agree with (within consensus_tolerance; planes through
+//      triples of the points, none steeper than 45 degrees), those nearest the node
+//      weighing most, refitted to them; the node takes its height. On a building edge
+//      it takes one side (the one under the node), not a wall in between;
 //   3. nodes without enough points take the robust plane (holes, the region's border);
 //   4. a few passes of smoothing (each node's deviation from the robust plane halfway
 //      to its 4 neighbours' mean), so one wrong node does not start a spike.
@@ -42,6 +43,12 @@ struct TiePointStartOptions {
   // (centimetres) plus the curvature of the terrain over a neighbourhood.
   double consensus_tolerance = 0.5;
   int smoothing_passes = 1;
+  // The local plane needs this many agreeing points; among planes that have them, the
+  // one whose agreeing points lie closest to the node wins (weights
+  // exp(-d^2 / (weight_radius_nodes x spacing)^2)).
+  int min_inliers = 4;
+  double weight_radius_nodes = 1.0;
+  double weight_radius = 0.0;  // m, set from weight_radius_nodes by the fit
 
   void Check() const;  // throws std::invalid_argument naming the option
 };
