@@ -115,7 +115,8 @@ class PointBuckets {
 // one-sided neighbourhood at the border). Empty when fewer than min_points agree.
 // `offset` receives the distance from (x, y) to the inliers' centroid.
 std::optional<double> LocalRobustHeight(const std::vector<Eigen::Vector3d>& near, double x, double y,
-                                        const TiePointStartOptions& options, double* offset) {
+                                        const TiePointStartOptions& options, double weight_radius,
+                                        double* offset) {
   const int n = static_cast<int>(near.size());
   if (n < std::max(3, options.min_points)) return std::nullopt;
   std::vector<Eigen::Vector3d> local;
@@ -148,7 +149,7 @@ std::optional<double> LocalRobustHeight(const std::vector<Eigen::Vector3d>& near
   // Score: inliers weighted by closeness to the node, so a small roof under the node
   // outweighs more ground points further out.
   std::vector<double> weight(n);
-  const double r0 = options.weight_radius;
+  const double r0 = weight_radius;
   for (int i = 0; i < n; ++i) weight[i] = std::exp(-local[i].head<2>().squaredNorm() / (r0 * r0));
   double best_score = 0.0;
   int best = 0;
@@ -212,6 +213,8 @@ void TiePointStartOptions::Check() const {
   if (!(min_tolerance >= 0)) fail("min_tolerance must be >= 0");
   if (!(consensus_tolerance > 0)) fail("consensus_tolerance must be > 0");
   if (smoothing_passes < 0) fail("smoothing_passes must be >= 0");
+  if (min_inliers < 3) fail("min_inliers must be >= 3");
+  if (!(weight_radius_nodes > 0)) fail("weight_radius_nodes must be > 0");
 }
 
 std::string TiePointStartReport::Brief() const {
@@ -282,8 +285,7 @@ TiePointHeightGrid FitTiePointHeights(const std::vector<Eigen::Vector3d>& all_po
   grid.nx = std::max(1, static_cast<int>(std::ceil(range.x() / spacing - 1e-9)));
   grid.ny = std::max(1, static_cast<int>(std::ceil(range.y() / spacing - 1e-9)));
   const double step = std::max(range.x() / grid.nx, range.y() / grid.ny);
-  TiePointStartOptions scaled = options;
-  scaled.weight_radius = options.weight_radius_nodes * step;
+  const double weight_radius = options.weight_radius_nodes * step;
   const PointBuckets buckets(points, grid.min, options.radius_nodes * step);
   grid.heights.resize(static_cast<size_t>(grid.nx + 1) * (grid.ny + 1));
   for (int j = 0; j <= grid.ny; ++j) {
@@ -307,7 +309,7 @@ TiePointHeightGrid FitTiePointHeights(const std::vector<Eigen::Vector3d>& all_po
         }
         if (static_cast<int>(near.size()) < options.min_points) continue;
         double offset = 0.0;
-        const std::optional<double> fitted = LocalRobustHeight(near, x, y, scaled, &offset);
+        const std::optional<double> fitted = LocalRobustHeight(near, x, y, options, weight_radius, &offset);
         if (!fitted) continue;
         // All agreeing points off to one side (the edge of a hole): the plane would be
         // extrapolated; a larger neighbourhood may take the other side in, else the node

@@ -48,7 +48,6 @@ struct TiePointStartOptions {
   // exp(-d^2 / (weight_radius_nodes x spacing)^2)).
   int min_inliers = 4;
   double weight_radius_nodes = 1.0;
-  double weight_radius = 0.0;  // m, set from weight_radius_nodes by the fit
 
   void Check() const;  // throws std::invalid_argument naming the option
 };
