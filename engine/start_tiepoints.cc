@@ -105,14 +105,17 @@ class PointBuckets {
   std::unordered_map<long long, std::vector<int>> cells_;
 };
 
-// Height at (x, y) of the local plane with the largest consensus: planes through
+// Height at (x, y) of the local plane with the best consensus: planes through
 // triples of the neighbourhood's points, each scored by the points within
 // consensus_tolerance; the best one refitted by least squares to its inliers (twice).
 // Consensus and not median/MAD: where blunders happen to make up half of a small
 // neighbourhood they still scatter over metres while the good points agree within
 // centimetres, so the agreeing set wins (the median lands in between). A plane and not
 // a level, so a slope does not bias the node towards the side with more points (or the
-// one-sided neighbourhood at the border). Empty when fewer than min_points agree.
+// one-sided neighbourhood at the border). Among planes with at least min_inliers
+// agreeing points the one whose agreeing points lie nearest the node (weights
+// exp(-d^2 / weight_radius^2)) wins: the roof under the node, not the larger ground
+// around it. Empty when no plane has min_inliers agreeing points.
 // `offset` receives the distance from (x, y) to the inliers' centroid.
 std::optional<double> LocalRobustHeight(const std::vector<Eigen::Vector3d>& near, double x, double y,
                                         const TiePointStartOptions& options, double weight_radius,
