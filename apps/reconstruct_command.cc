@@ -35,6 +35,7 @@ struct ReconstructArgs {
   int max_iterations = AdjustmentOptions().max_iterations;
   double crease_angle = AdjustmentOptions().crease_angle_deg;
   std::optional<double> start_height;
+  std::string start = "auto";
   int lifting_steps = 0;
   double lifting_range = 30.0;
   std::vector<double> roi;
@@ -86,6 +87,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.adjustment.max_iterations = args.max_iterations;
   options.adjustment.crease_angle_deg = args.crease_angle;
   options.start_height = args.start_height;
+  options.start = StartSurfaceFromName(args.start);
   options.lifting_steps = args.lifting_steps;
   options.lifting_range = args.lifting_range;
   options.colour = args.colour;
@@ -157,6 +159,11 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--max-iterations", args->max_iterations, "per level")->capture_default_str();
   sub->add_option("--crease-angle", args->crease_angle, "crease detection angle (deg); 180 = pure G1")->capture_default_str();
   sub->add_option("--start-height", args->start_height, "height of the start plane (local Z)");
+  sub->add_option("--start", args->start,
+                  "start surface: auto | plane | tiepoints (auto: tie points when >= 20 lie in the "
+                  "region and neither --start-height nor lifting is given)")
+      ->check(CLI::IsMember({"auto", "plane", "tiepoints"}))
+      ->capture_default_str();
   sub->add_option("--lifting-steps", args->lifting_steps, "object lifting: start heights to try (0 = off)")->capture_default_str();
   sub->add_option("--lifting-range", args->lifting_range, "object lifting: search interval (m)")->capture_default_str();
   sub->add_option("--roi", args->roi, "region of interest: xmin ymin zmin xmax ymax zmax (global)")->expected(6);

@@ -6,6 +6,7 @@
 #include <memory>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
@@ -89,7 +90,46 @@ TinMesh StartPlane(const RegionOfInterest& roi, double height, double spacing) {
   return MakeStartGrid(grid);
 }
 
+// The coarsest level's start TIN: fitted to the tie points or the plane.
+TinMesh StartSurface(const ImageBlock& block, const RegionOfInterest& roi, double height,
+                     double spacing, const ReconstructionOptions& options, ReconstructionReport* report) {
+  const std::vector<Eigen::Vector3d> points = TiePointsInRegion(block, roi);
+  const bool plane_chosen = options.start_height.has_value() || options.lifting_steps > 0;
+  if (!UseTiePointStart(options.start, static_cast<int>(points.size()), plane_chosen, options.tiepoint_start)) {
+    return StartPlane(roi, height, spacing);
+  }
+  TiePointStartReport fit;
+  TinMesh mesh = StartFromTiePoints(points, roi, spacing, options.tiepoint_start, &fit);
+  report->start_surface = "tiepoints";
+  report->start_detail = fit.Brief();
+  return mesh;
+}
+
 }  // namespace
+
+double ChooseLiftedHeight(const std::vector<LiftingTrial>& trials) {
+  auto valid = [](const LiftingTrial& t) { return t.sigma0 < 1e299 && t.observations > 0; };
+  double best_sigma = 1e300, best_height = std::numeric_limits<double>::quiet_NaN();
+  for (size_t i = 0; i + 1 < trials.size(); ++i) {
+    const LiftingTrial& low = trials[i];
+    const LiftingTrial& high = trials[i + 1];
+    if (!valid(low) || !valid(high) || !(low.mean_dn > 0 && high.mean_dn <= 0)) continue;
+    const double sigma = std::min(low.sigma0, high.sigma0);
+    if (sigma < best_sigma) {
+      best_sigma = sigma;
+      best_height = low.height + (high.height - low.height) * low.mean_dn / (low.mean_dn - high.mean_dn);
+    }
+  }
+  if (std::isfinite(best_height)) return best_height;
+  for (const LiftingTrial& t : trials) {
+    if (valid(t) && t.sigma0 < best_sigma) {
+      best_sigma = t.sigma0;
+      best_height = t.height + t.mean_dn;
+    }
+  }
+  if (!std::isfinite(best_height)) throw std::runtime_error("object lifting: no image sees any of the trial heights");
+  return best_height;
+}
 
 void ReconstructionOptions::Check() const {
   auto fail = [](const std::string& what) {
@@ -104,6 +144,7 @@ void ReconstructionOptions::Check() const {
   }
   adjustment.Check();
   windows.Check();
+  tiepoint_start.Check();
 }
 
 std::string ReconstructionReport::BriefReport() const {
@@ -122,6 +163,8 @@ std::string ReconstructionReport::Json() const {
   using nlohmann::json;
   json j;
   j["start_height"] = start_height;
+  j["start_surface"] = start_surface;
+  if (!start_detail.empty()) j["start_detail"] = start_detail;
   j["seconds_total"] = seconds_total;
   j["seconds_images"] = seconds_images;
   j["images_cached"] = images_cached;
@@ -246,8 +289,6 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
   if (options.lifting_steps > 0) {
     say("stage object lifting: " + std::to_string(options.lifting_steps) + " start heights over " +
         std::to_string(options.lifting_range) + " m");
-    double best_sigma = 1e300;
-    double best_height = start_height;
     for (int s = 0; s < options.lifting_steps; ++s) {
       const double height =
           start_height - 0.5 * options.lifting_range +
@@ -272,16 +313,14 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       result.report.lifting.push_back(trial);
       say("  lifting height " + std::to_string(height) + " m: sigma0 " + std::to_string(trial.sigma0) +
           ", mean displacement " + std::to_string(trial.mean_dn) + " m");
-      if (trial.sigma0 < best_sigma) {
-        best_sigma = trial.sigma0;
-        best_height = height + trial.mean_dn;
-      }
     }
-    start_height = best_height;
+    start_height = ChooseLiftedHeight(result.report.lifting);
+    say("  lifted start height " + std::to_string(start_height) + " m");
   }
   result.report.start_height = start_height;
 
-  TinMesh mesh = StartPlane(roi, start_height, edge_length(coarsest));
+  TinMesh mesh = StartSurface(block, roi, start_height, edge_length(coarsest), options, &result.report);
+  say("stage start: " + result.report.start_surface + (result.report.start_detail.empty() ? "" : ": " + result.report.start_detail));
   for (int level = coarsest; level >= 0; --level) {
     const auto level_start = std::chrono::steady_clock::now();
     if (level != coarsest) {

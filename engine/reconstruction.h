@@ -16,6 +16,7 @@
 #include "engine/adjustment_options.h"
 #include "engine/level_windows.h"
 #include "engine/pyramid.h"
+#include "engine/start_tiepoints.h"
 #include "engine/window_adjustment.h"
 #include "io/image_block.h"
 #include "mesh/tessellation.h"
@@ -39,6 +40,11 @@ struct ReconstructionOptions {
   // Start surface: a plane at this height (local Z); default: the block's mean terrain
   // height, else the median height of the tie points.
   std::optional<double> start_height;
+  // Start surface (engine/start_tiepoints.h): auto = fitted to the tie points when at
+  // least tiepoint_start.min_points_total lie in the region and neither start_height
+  // nor object lifting asks for a plane.
+  StartSurfaceKind start = StartSurfaceKind::kAuto;
+  TiePointStartOptions tiepoint_start;
   // Object lifting on the coarsest level (seed 001): try start heights over
   // +- lifting_range / 2 around the start height in lifting_steps steps, one iteration
   // each, and start from the best. 0 steps = off.
@@ -63,6 +69,14 @@ struct LiftingTrial {
   long long observations = 0;
 };
 
+// Object lifting's choice (seed 001): the surface below the truth moves up and above
+// it moves down, so the truth lies where the mean displacement changes sign from + to -
+// between two neighbouring trial heights; of several such changes the one next to the
+// smaller sigma0, the height interpolated to zero displacement. Without any sign
+// change: the trial of minimal sigma0 plus its displacement. Trials with sigma0 >=
+// 1e299 (no image saw them) are skipped.
+double ChooseLiftedHeight(const std::vector<LiftingTrial>& trials);
+
 struct LevelReport {
   int level = 0;               // 0 = finest
   double ground_pixel = 0.0;   // mean ground pixel size of the level's images (m)
@@ -79,6 +93,8 @@ struct LevelReport {
 struct ReconstructionReport {
   std::vector<LiftingTrial> lifting;
   double start_height = 0.0;
+  std::string start_surface = "plane";  // or "tiepoints"
+  std::string start_detail;             // TiePointStartReport::Brief()
   std::vector<LevelReport> levels;  // in processing order, coarsest first
   double seconds_total = 0.0;
   double seconds_images = 0.0;

@@ -368,6 +368,19 @@ Scene ParseScene(const nlohmann::json& json, const std::string& source_name) {
     o.contrast = a.Number("contrast", o.contrast);
     Require(o.mean >= 0 && o.mean <= 1, a, "mean", "must be in [0, 1]");
     Require(o.contrast >= 0, a, "contrast", "must be >= 0");
+    for (const Field& b : a.Array("extra_bands")) {
+      AlbedoBand band;
+      band.wavelength_min = b.Number("wavelength_min");
+      band.wavelength_max = b.Number("wavelength_max");
+      band.contrast = b.Number("contrast", band.contrast);
+      band.components = b.Int("components", band.components);
+      Require(band.wavelength_min > 0, b, "wavelength_min", "must be > 0");
+      Require(band.wavelength_max >= band.wavelength_min, b, "wavelength_max",
+              "must be >= wavelength_min");
+      Require(band.contrast >= 0, b, "contrast", "must be >= 0");
+      Require(band.components >= 1 && band.components <= 1000, b, "components", "must be 1..1000");
+      o.extra_bands.push_back(band);
+    }
     for (const Field& p : a.Array("patches")) {
       AlbedoPatch patch;
       patch.box = p.String("kind", "rectangle") == "box";

@@ -72,6 +72,14 @@ struct AlbedoPatch {
   bool Contains(const Eigen::Vector3d& p) const;
 };
 
+// A further texture band added to the main one (own components, own contrast).
+struct AlbedoBand {
+  double wavelength_min = 0;    // m
+  double wavelength_max = 0;    // m
+  double contrast = 0.1;        // standard deviation of this band alone
+  int components = 16;
+};
+
 struct AlbedoOptions {
   int seed = 1;
   int components = 32;          // random 3D sinusoids
@@ -80,6 +88,10 @@ struct AlbedoOptions {
   double wavelength_max = 0;
   double mean = 0.5;            // mean albedo
   double contrast = 0.18;       // standard deviation of the albedo before clamping
+  // Added after the main band from their own random streams, so a scene without them
+  // renders exactly as before. Use: long wavelengths for the coarse pyramid levels
+  // without weakening the short ones the finest level matches.
+  std::vector<AlbedoBand> extra_bands;
   std::vector<AlbedoPatch> patches;
 };
 

@@ -3,8 +3,8 @@
 # job on the bundled default scene into ./out/default/:
 #   1. render the seed gable-roof stereo pair (1:12000, f 153 mm, noise sigma 4) with
 #      its ground truth,
-#   2. reconstruct it with `facets reconstruct` (image pyramid, multigrid, start plane
-#      at the tie points' median height),
+#   2. reconstruct it with `facets reconstruct` (image pyramid, multigrid, start surface
+#      fitted to the tie points: --start auto),
 #   3. score the surface against the truth with `facets evaluate`.
 # (The built-up block with walls becomes the default once walls reconstruct: issue 7.)
 set -euo pipefail

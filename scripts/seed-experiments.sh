@@ -36,7 +36,7 @@ for row in "${rows[@]}"; do
   for lambda in 2000 4000; do
     run="$out/$scene/$reg-$lambda"
     "$facets" reconstruct --colmap "$out/$scene/scene/sparse" --images "$out/$scene/scene/images" \
-      --out "$run" --levels 3 --regularisation "$reg" --lambda "$lambda" --roi -12 -12 0 12 12 9 \
+      --out "$run" --levels 3 --regularisation "$reg" --lambda "$lambda" --roi -12 -12 0 12 12 9 --start plane \
       --no-glb --no-vrml --no-rasters > "$run.log" 2>&1
     "$facets" evaluate --truth "$out/$scene/scene" --mesh "$run/surface.ply" > "$run.eval" 2>&1
     sigma0=$(grep -o '"sigma0_finest": [0-9.]*' "$run/report.json" | awk '{printf "%.2f", $2}')
