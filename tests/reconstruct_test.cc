@@ -22,6 +22,10 @@ TEST(Reconstruct, SeedGableRoofFromTiePointsWithPyramid) {
 
   ReconstructionOptions options;
   options.levels = 3;
+  // The plane start this test was written for: from the tie-point start the finest
+  // level's first window oscillates (30 iterations, not converged) although its
+  // result is closer to the truth (docs/EXPERIMENTS.md, tie-point start).
+  options.start = StartSurfaceKind::kPlane;
   options.progress = [](const std::string& line) { std::cout << line << "\n"; };
   const Reconstruction r = Reconstruct(block, options);
   ASSERT_EQ(r.report.levels.size(), 3u);
