@@ -35,6 +35,7 @@ struct ReconstructArgs {
   int max_iterations = AdjustmentOptions().max_iterations;
   double crease_angle = AdjustmentOptions().crease_angle_deg;
   std::optional<double> start_height;
+  std::string start_plane = "auto";
   int lifting_steps = 0;
   double lifting_range = 30.0;
   std::vector<double> roi;
@@ -86,6 +87,15 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.adjustment.max_iterations = args.max_iterations;
   options.adjustment.crease_angle_deg = args.crease_angle;
   options.start_height = args.start_height;
+  if (args.start_plane == "auto") {
+    options.start_plane = ReconstructionOptions::StartPlane::kAuto;
+  } else if (args.start_plane == "horizontal") {
+    options.start_plane = ReconstructionOptions::StartPlane::kHorizontal;
+  } else if (args.start_plane == "fitted") {
+    options.start_plane = ReconstructionOptions::StartPlane::kFitted;
+  } else {
+    throw std::invalid_argument("--start-plane must be auto, horizontal or fitted, not '" + args.start_plane + "'");
+  }
   options.lifting_steps = args.lifting_steps;
   options.lifting_range = args.lifting_range;
   options.colour = args.colour;
@@ -157,6 +167,9 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--max-iterations", args->max_iterations, "per level")->capture_default_str();
   sub->add_option("--crease-angle", args->crease_angle, "crease detection angle (deg); 180 = pure G1")->capture_default_str();
   sub->add_option("--start-height", args->start_height, "height of the start plane (local Z)");
+  sub->add_option("--start-plane", args->start_plane,
+                  "auto (fitted to the tie points when tilted > 45 deg, e.g. a facade) | horizontal | fitted")
+      ->capture_default_str();
   sub->add_option("--lifting-steps", args->lifting_steps, "object lifting: start heights to try (0 = off)")->capture_default_str();
   sub->add_option("--lifting-range", args->lifting_range, "object lifting: search interval (m)")->capture_default_str();
   sub->add_option("--roi", args->roi, "region of interest: xmin ymin zmin xmax ymax zmax (global)")->expected(6);

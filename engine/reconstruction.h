@@ -39,6 +39,13 @@ struct ReconstructionOptions {
   // Start surface: a plane at this height (local Z); default: the block's mean terrain
   // height, else the median height of the tie points.
   std::optional<double> start_height;
+  // Orientation of the start plane (engine/start_fitted_plane.h). kAuto: a plane fitted
+  // robustly to the tie points in the region when it is tilted more than
+  // fitted_plane_min_tilt_deg from the horizontal (a facade seen from the street), else
+  // the horizontal plane. Ignored when start_height is given.
+  enum class StartPlane { kAuto, kHorizontal, kFitted };
+  StartPlane start_plane = StartPlane::kAuto;
+  double fitted_plane_min_tilt_deg = 45.0;
   // Object lifting on the coarsest level (seed 001): try start heights over
   // +- lifting_range / 2 around the start height in lifting_steps steps, one iteration
   // each, and start from the best. 0 steps = off.
