@@ -36,6 +36,7 @@ struct ReconstructArgs {
   double crease_angle = AdjustmentOptions().crease_angle_deg;
   std::optional<double> start_height;
   std::string start = "auto";
+  std::string start_plane = "auto";
   int lifting_steps = 0;
   double lifting_range = 30.0;
   std::vector<double> roi;
@@ -88,6 +89,15 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.adjustment.crease_angle_deg = args.crease_angle;
   options.start_height = args.start_height;
   options.start = StartSurfaceFromName(args.start);
+  if (args.start_plane == "auto") {
+    options.start_plane = ReconstructionOptions::StartPlane::kAuto;
+  } else if (args.start_plane == "horizontal") {
+    options.start_plane = ReconstructionOptions::StartPlane::kHorizontal;
+  } else if (args.start_plane == "fitted") {
+    options.start_plane = ReconstructionOptions::StartPlane::kFitted;
+  } else {
+    throw std::invalid_argument("--start-plane must be auto, horizontal or fitted, not '" + args.start_plane + "'");
+  }
   options.lifting_steps = args.lifting_steps;
   options.lifting_range = args.lifting_range;
   options.colour = args.colour;
@@ -163,6 +173,9 @@ void AddReconstructCommand(CLI::App& app) {
                   "start surface: auto | plane | tiepoints (auto: tie points when >= 20 lie in the "
                   "region and neither --start-height nor lifting is given)")
       ->check(CLI::IsMember({"auto", "plane", "tiepoints"}))
+      ->capture_default_str();
+  sub->add_option("--start-plane", args->start_plane,
+                  "auto (fitted to the tie points when tilted > 45 deg, e.g. a facade) | horizontal | fitted")
       ->capture_default_str();
   sub->add_option("--lifting-steps", args->lifting_steps, "object lifting: start heights to try (0 = off)")->capture_default_str();
   sub->add_option("--lifting-range", args->lifting_range, "object lifting: search interval (m)")->capture_default_str();

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "engine/start_fitted_plane.h"
 #include "mesh/creases.h"
 #include "mesh/local_ops.h"
 #include "mesh/subdivision.h"
@@ -79,6 +80,30 @@ double GroundPixel(const ImageBlock& block, const Eigen::Vector3d& centre) {
     gsd.push_back((centre - image.ProjectionCentre()).norm() / focal);
   }
   return Median(gsd);
+}
+
+// The tie points inside the region and the mean projection centre, for the fitted start
+// plane; nullopt keeps the horizontal plane (see ReconstructionOptions::start_plane).
+std::optional<FittedPlane> ChooseFittedPlane(const ImageBlock& block, const RegionOfInterest& roi,
+                                             const ReconstructionOptions& options) {
+  using Mode = ReconstructionOptions::StartPlane;
+  if (options.start_height || options.start_plane == Mode::kHorizontal) return std::nullopt;
+  std::vector<Eigen::Vector3d> points;
+  for (const auto& p : block.points) {
+    if (roi.Contains(p.xyz)) points.push_back(p.xyz);
+  }
+  Eigen::Vector3d viewpoint = Eigen::Vector3d::Zero();
+  for (const auto& image : block.images) viewpoint += image.ProjectionCentre();
+  viewpoint /= static_cast<double>(std::max<size_t>(1, block.images.size()));
+  if (options.start_plane == Mode::kFitted) return FitStartPlane(points, viewpoint);  // throws when unusable
+  if (points.size() < 10) return std::nullopt;
+  try {
+    const FittedPlane plane = FitStartPlane(points, viewpoint);
+    if (plane.tilt_deg > options.fitted_plane_min_tilt_deg) return plane;
+  } catch (const std::runtime_error&) {
+    // Collinear tie points: no plane to fit, the horizontal start stays.
+  }
+  return std::nullopt;
 }
 
 TinMesh StartPlane(const RegionOfInterest& roi, double height, double spacing) {
@@ -245,6 +270,14 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
   double start_height = ChooseStartHeight(block, roi, options);
   Eigen::Vector3d centre = 0.5 * (roi.min + roi.max);
   centre.z() = start_height;
+  const std::optional<FittedPlane> fitted = ChooseFittedPlane(block, roi, options);
+  if (fitted) {
+    centre = fitted->centre;
+    say("start plane fitted to " + std::to_string(fitted->kept) + " of " + std::to_string(fitted->total) +
+        " tie points: tilt " + std::to_string(fitted->tilt_deg) + " deg, RMS " + std::to_string(fitted->rms) +
+        " m, extent " + std::to_string((fitted->max_uv - fitted->min_uv).x()) + " x " +
+        std::to_string((fitted->max_uv - fitted->min_uv).y()) + " m");
+  }
   const double gsd0 = GroundPixel(block, centre);
   const int num_levels = options.levels;
 
@@ -286,7 +319,9 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
 
   // Object lifting on the coarsest level (seed 001).
   const int coarsest = num_levels - 1;
-  if (options.lifting_steps > 0) {
+  if (options.lifting_steps > 0 && fitted) {
+    say("object lifting skipped: it searches heights of a horizontal plane, the start plane is fitted");
+  } else if (options.lifting_steps > 0) {
     say("stage object lifting: " + std::to_string(options.lifting_steps) + " start heights over " +
         std::to_string(options.lifting_range) + " m");
     for (int s = 0; s < options.lifting_steps; ++s) {
@@ -319,7 +354,13 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
   }
   result.report.start_height = start_height;
 
-  TinMesh mesh = StartSurface(block, roi, start_height, edge_length(coarsest), options, &result.report);
+  TinMesh mesh;
+  if (fitted) {
+    mesh = MakeFittedPlaneMesh(*fitted, edge_length(coarsest));
+    result.report.start_surface = "fitted plane";
+  } else {
+    mesh = StartSurface(block, roi, start_height, edge_length(coarsest), options, &result.report);
+  }
   say("stage start: " + result.report.start_surface + (result.report.start_detail.empty() ? "" : ": " + result.report.start_detail));
   for (int level = coarsest; level >= 0; --level) {
     const auto level_start = std::chrono::steady_clock::now();

@@ -45,6 +45,13 @@ struct ReconstructionOptions {
   // nor object lifting asks for a plane.
   StartSurfaceKind start = StartSurfaceKind::kAuto;
   TiePointStartOptions tiepoint_start;
+  // Orientation of the start plane (engine/start_fitted_plane.h). kAuto: a plane fitted
+  // robustly to the tie points in the region when it is tilted more than
+  // fitted_plane_min_tilt_deg from the horizontal (a facade seen from the street), else
+  // the horizontal plane. Ignored when start_height is given.
+  enum class StartPlane { kAuto, kHorizontal, kFitted };
+  StartPlane start_plane = StartPlane::kAuto;
+  double fitted_plane_min_tilt_deg = 45.0;
   // Object lifting on the coarsest level (seed 001): try start heights over
   // +- lifting_range / 2 around the start height in lifting_steps steps, one iteration
   // each, and start from the best. 0 steps = off.
@@ -93,7 +100,7 @@ struct LevelReport {
 struct ReconstructionReport {
   std::vector<LiftingTrial> lifting;
   double start_height = 0.0;
-  std::string start_surface = "plane";  // or "tiepoints"
+  std::string start_surface = "plane";  // or "tiepoints", "fitted plane"
   std::string start_detail;             // TiePointStartReport::Brief()
   std::vector<LevelReport> levels;  // in processing order, coarsest first
   double seconds_total = 0.0;
