@@ -20,6 +20,7 @@
 #include "io/atomic_file.h"
 #include "io/colmap_io.h"
 #include "io/project_io.h"
+#include "mesh/closed_surface.h"
 
 namespace facets {
 namespace {
@@ -38,6 +39,12 @@ struct ReconstructArgs {
   int lifting_steps = 0;
   double lifting_range = 30.0;
   std::vector<double> roi;
+  std::string start = "plane";
+  std::string start_mesh;
+  double closed_lifting_range = ClosedStartOptions().lifting_range;
+  double background_below = AdjustmentOptions().background_below;
+  double robust = AdjustmentOptions().robust_k;
+  double reject = AdjustmentOptions().reject_k;
   bool colour = false;
   int window_faces = WindowPartitionOptions().max_faces;
   int window_margin = WindowPartitionOptions().margin_rings;
@@ -89,6 +96,16 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.lifting_steps = args.lifting_steps;
   options.lifting_range = args.lifting_range;
   options.colour = args.colour;
+  if (args.start != "plane" && args.start != "closed") {
+    throw std::invalid_argument("--start must be plane or closed, not '" + args.start + "'");
+  }
+  options.start_closed = args.start == "closed";
+  options.closed.mesh_file = args.start_mesh;
+  options.closed.lifting_steps = args.lifting_steps;
+  options.closed.lifting_range = args.closed_lifting_range;
+  options.adjustment.background_below = args.background_below;
+  options.adjustment.robust_k = args.robust;
+  options.adjustment.reject_k = args.reject;
   options.windows.partition.max_faces = args.window_faces;
   options.windows.partition.margin_rings = args.window_margin;
   options.windows.sweeps = args.sweeps;
@@ -128,6 +145,19 @@ void RunReconstruct(const ReconstructArgs& args) {
   const std::filesystem::path out(args.out);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (options.start_closed || !options.closed.mesh_file.empty()) {
+    // A closed start must come out closed and without self-intersections.
+    say("closed surface: TIN " + CheckClosedSurface(result.mesh).Brief() + "; surface facets " +
+        CheckClosedSurface(result.tessellation.points, result.tessellation.triangles).Brief());
+  }
+  const WindowReport& finest = result.report.levels.back().window;
+  if (finest.background > 0 || finest.rejected > 0 || finest.downweighted > 0) {
+    const double all = static_cast<double>(std::max<long long>(finest.observations + finest.rejected, 1));
+    say("finest level: " + std::to_string(finest.background) + " background pixels dropped, " +
+        std::to_string(finest.rejected) + " observations rejected (" +
+        std::to_string(100.0 * finest.rejected / all) + " %), " + std::to_string(finest.downweighted) +
+        " down-weighted (" + std::to_string(100.0 * finest.downweighted / all) + " %)");
+  }
   int flagged = 0;
   for (uint8_t f : result.vertex_flags) flagged += f != 0 ? 1 : 0;
   say("summary: " + std::to_string(result.mesh.n_vertices()) + " vertices (" + std::to_string(flagged) +
@@ -159,6 +189,14 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--lifting-steps", args->lifting_steps, "object lifting: start heights to try (0 = off)")->capture_default_str();
   sub->add_option("--lifting-range", args->lifting_range, "object lifting: search interval (m)")->capture_default_str();
   sub->add_option("--roi", args->roi, "region of interest: xmin ymin zmin xmax ymax zmax (global)")->expected(6);
+  sub->add_option("--start", args->start, "start surface: plane | closed (ellipsoid fitted to the tie points)")->capture_default_str();
+  sub->add_option("--start-mesh", args->start_mesh, "closed (or any) start mesh, PLY or OBJ, local coordinates");
+  sub->add_option("--closed-lifting-range", args->closed_lifting_range,
+                  "object lifting of a closed start: scale factors over 1 +- range/2")->capture_default_str();
+  sub->add_option("--background-below", args->background_below,
+                  "pixels with grey value at or below this are background, no observation (negative = off)")->capture_default_str();
+  sub->add_option("--robust", args->robust, "Huber weights beyond K robust sigmas (0 = off)")->capture_default_str();
+  sub->add_option("--reject", args->reject, "reject residuals beyond R robust sigmas (0 = off)")->capture_default_str();
   sub->add_flag("--colour", args->colour, "one grey value per channel (geometry shared)");
   sub->add_option("--window-faces", args->window_faces, "most core triangles per window")->capture_default_str();
   sub->add_option("--window-margin", args->window_margin, "face rings around a window's core")->capture_default_str();

@@ -145,6 +145,12 @@ std::string ReconstructionReport::Json() const {
                      {"cg_iterations", w.cg_iterations_total},
                      {"observations", w.observations},
                      {"pseudo_observations", w.pseudo_observations},
+                     {"background_pixels", w.background},
+                     {"rejected", w.rejected},
+                     {"rejected_share", w.observations + w.rejected > 0
+                                            ? static_cast<double>(w.rejected) / (w.observations + w.rejected)
+                                            : 0.0},
+                     {"downweighted", w.downweighted},
                      {"unknowns", w.unknowns},
                      {"redundancy", w.redundancy},
                      {"sigma0", w.sigma0},
@@ -158,6 +164,8 @@ std::string ReconstructionReport::Json() const {
              {"observations", it.observations},
              {"cg_iterations", it.cg_iterations},
              {"sigma0", it.sigma0},
+             {"robust_scale", it.robust_scale},
+             {"rejected", it.rejected},
              {"max_dn", {it.max_dn_interior, it.max_dn_border, it.max_dn_corner}},
              {"seconds", {{"cast", it.seconds_cast},
                           {"linearise", it.seconds_linearise},
@@ -198,9 +206,16 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
   if (block.images.size() < 2) throw std::runtime_error("reconstruction needs at least 2 images");
   Reconstruction result;
   const RegionOfInterest roi = ChooseRoi(block, options);
-  double start_height = ChooseStartHeight(block, roi, options);
+  // A closed start (objects) replaces the plane; its centre sets the ground pixel.
+  std::optional<ClosedStart> closed;
+  if (options.start_closed || !options.closed.mesh_file.empty()) {
+    closed = PrepareClosedStart(block, roi, options.closed);
+    say(closed->Describe());
+  }
+  double start_height = closed ? closed->centre.z() : ChooseStartHeight(block, roi, options);
   Eigen::Vector3d centre = 0.5 * (roi.min + roi.max);
   centre.z() = start_height;
+  if (closed) centre = closed->centre;
   const double gsd0 = GroundPixel(block, centre);
   const int num_levels = options.levels;
 
@@ -242,7 +257,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
 
   // Object lifting on the coarsest level (seed 001).
   const int coarsest = num_levels - 1;
-  if (options.lifting_steps > 0) {
+  if (options.lifting_steps > 0 && !closed) {
     say("stage object lifting: " + std::to_string(options.lifting_steps) + " start heights over " +
         std::to_string(options.lifting_range) + " m");
     double best_sigma = 1e300;
@@ -280,7 +295,11 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
   }
   result.report.start_height = start_height;
 
-  TinMesh mesh = StartPlane(roi, start_height, edge_length(coarsest));
+  TinMesh mesh = closed ? MakeClosedStartMesh(*closed, options.closed, edge_length(coarsest),
+                                              options.closed.lifting_steps > 0 ? level_images(coarsest)
+                                                                               : std::vector<LevelImage>{},
+                                              level_options(coarsest), &result.report.lifting, say)
+                        : StartPlane(roi, start_height, edge_length(coarsest));
   for (int level = coarsest; level >= 0; --level) {
     const auto level_start = std::chrono::steady_clock::now();
     if (level != coarsest) {
