@@ -41,6 +41,7 @@ struct ReconstructArgs {
   std::vector<double> roi;
   std::string start = "plane";
   std::string start_mesh;
+  std::string closed_shape = ClosedStartOptions().shape;
   double closed_lifting_range = ClosedStartOptions().lifting_range;
   double background_below = AdjustmentOptions().background_below;
   double robust = AdjustmentOptions().robust_k;
@@ -101,6 +102,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   }
   options.start_closed = args.start == "closed";
   options.closed.mesh_file = args.start_mesh;
+  options.closed.shape = args.closed_shape;
   options.closed.lifting_steps = args.lifting_steps;
   options.closed.lifting_range = args.closed_lifting_range;
   options.adjustment.background_below = args.background_below;
@@ -191,6 +193,8 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--roi", args->roi, "region of interest: xmin ymin zmin xmax ymax zmax (global)")->expected(6);
   sub->add_option("--start", args->start, "start surface: plane | closed (ellipsoid fitted to the tie points)")->capture_default_str();
   sub->add_option("--start-mesh", args->start_mesh, "closed (or any) start mesh, PLY or OBJ, local coordinates");
+  sub->add_option("--closed-shape", args->closed_shape,
+                  "automatic closed start: ellipsoid | hull (convex hull of the tie points)")->capture_default_str();
   sub->add_option("--closed-lifting-range", args->closed_lifting_range,
                   "object lifting of a closed start: scale factors over 1 +- range/2")->capture_default_str();
   sub->add_option("--background-below", args->background_below,

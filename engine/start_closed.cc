@@ -205,10 +205,18 @@ EllipsoidFit FitStartEllipsoid(const std::vector<Eigen::Vector3d>& points,
                              std::to_string(n) + " tie points fit one ellipsoid");
   }
   fit.rms_distance = std::sqrt(sum / fit.inliers);
+  fit.inlier.resize(n);
+  for (size_t i = 0; i < n; ++i) fit.inlier[i] = TukeyWeight(r[i], s) > 0.0;
   return fit;
 }
 
 void ClosedStartOptions::Check() const {
+  if (shape != "ellipsoid" && shape != "hull") {
+    throw std::invalid_argument("closed start: shape must be ellipsoid or hull, not '" + shape + "'");
+  }
+  if (!(hull_inflate >= 0.0 && hull_inflate < 1.0)) {
+    throw std::invalid_argument("closed start: hull_inflate must lie in [0, 1)");
+  }
   if (lifting_steps < 0) throw std::invalid_argument("closed start: lifting_steps must be >= 0");
   if (lifting_steps > 0 && !(lifting_range > 0.0 && lifting_range < 1.8)) {
     throw std::invalid_argument("closed start: lifting_range (scale range) must lie in (0, 1.8)");
@@ -221,6 +229,7 @@ std::string ClosedStart::Describe() const {
     out << "closed start from the given mesh: " << given->n_vertices() << " vertices, "
         << given->n_faces() << " faces, centre " << centre.transpose();
   } else if (fit) {
+    if (!hull_points.empty()) out << "convex hull of " << hull_points.size() << " tie points around the ";
     const Ellipsoid& e = fit->ellipsoid;
     out << "closed start: " << (fit->is_sphere ? "sphere" : "ellipsoid") << " centre "
         << e.centre.transpose() << ", radii " << e.radii.transpose() << " m, fitted to "
@@ -255,6 +264,11 @@ ClosedStart PrepareClosedStart(const ImageBlock& block, const RegionOfInterest& 
   }
   start.fit = FitStartEllipsoid(points, guess);
   start.centre = start.fit->ellipsoid.centre;
+  if (options.shape == "hull") {
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (start.fit->inlier[i]) start.hull_points.push_back(points[i]);
+    }
+  }
   return start;
 }
 
@@ -267,6 +281,12 @@ TinMesh MakeClosedStartMesh(const ClosedStart& start, const ClosedStartOptions& 
   if (start.given) {
     mesh = *start.given;
     QualityOptions quality;
+    quality.target_edge_length = edge_length;
+    QualityPass(&mesh, quality);
+    UpdateVertexNormals(&mesh);
+  } else if (!start.hull_points.empty()) {
+    mesh = MakeHullMesh(start.hull_points, start.centre, edge_length, options.hull_inflate);
+    QualityOptions quality;  // flat hull faces stretch the sphere's edges
     quality.target_edge_length = edge_length;
     QualityPass(&mesh, quality);
     UpdateVertexNormals(&mesh);

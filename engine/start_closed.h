@@ -10,6 +10,8 @@
 //   background the object stands before are far from any ellipsoid through the object
 //   and get weight 0. Triangulated as a geodesic ellipsoid with the coarsest level's
 //   edge length (mesh/closed_surface.h).
+// - Or the convex hull of those inlier tie points, grown a little (ClosedStartOptions::
+//   shape "hull"), for objects far from an ellipsoid (a temple, a box).
 // - Object lifting along the normals: the start scaled about its centre over a range
 //   of factors, one iteration each on the coarsest level; chosen by the sign change of
 //   the mean displacement (outward -> inward) and, among those, the smallest sigma0.
@@ -36,6 +38,7 @@ struct EllipsoidFit {
   int points = 0;           // tie points offered
   int inliers = 0;          // with weight > 0 in the final fit
   double rms_distance = 0;  // of the inliers to the ellipsoid (radial), m
+  std::vector<bool> inlier;  // per point offered
 };
 
 // The least-squares meeting point of the images' optical axes (the volume the cameras
@@ -48,8 +51,12 @@ EllipsoidFit FitStartEllipsoid(const std::vector<Eigen::Vector3d>& points,
                                const Eigen::Vector3d& centre_guess);
 
 struct ClosedStartOptions {
-  // Start mesh file; empty: the ellipsoid fitted to the tie points.
+  // Start mesh file; empty: the shape fitted to the tie points.
   std::string mesh_file;
+  // Automatic start: "ellipsoid" (fitted) or "hull" (convex hull of the ellipsoid
+  // fit's inlier tie points, grown by hull_inflate, for boxy objects).
+  std::string shape = "ellipsoid";
+  double hull_inflate = 0.05;
   // Object lifting: scale factors over 1 +- range / 2 in `steps` steps; 0 steps = off.
   int lifting_steps = 0;
   double lifting_range = 0.4;
@@ -62,6 +69,7 @@ struct ClosedStart {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   std::optional<EllipsoidFit> fit;    // automatic start
   std::optional<TinMesh> given;       // start mesh file
+  std::vector<Eigen::Vector3d> hull_points;  // shape "hull": the fit's inliers
   std::string Describe() const;
 };
 

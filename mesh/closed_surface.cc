@@ -5,10 +5,12 @@
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/convex_hull_3.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <stdexcept>
@@ -42,6 +44,55 @@ void Icosahedron(std::vector<Eigen::Vector3d>* vertices, std::vector<std::array<
 }
 
 }  // namespace
+
+TinMesh MakeHullMesh(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& centre,
+                     double edge_length, double inflate) {
+  if (points.size() < 4) throw std::runtime_error("convex hull: fewer than 4 points");
+  std::vector<Kernel::Point_3> cgal_points;
+  for (const auto& p : points) cgal_points.emplace_back(p.x(), p.y(), p.z());
+  CgalMesh hull;
+  CGAL::convex_hull_3(cgal_points.begin(), cgal_points.end(), hull);
+  if (hull.number_of_faces() < 4) throw std::runtime_error("convex hull: the points span no volume");
+  // Hull face planes n.x = d with outward unit n.
+  std::vector<std::pair<Eigen::Vector3d, double>> planes;
+  for (auto f : hull.faces()) {
+    Eigen::Vector3d x[3];
+    int k = 0;
+    for (auto v : CGAL::vertices_around_face(hull.halfedge(f), hull)) {
+      const auto& p = hull.point(v);
+      x[k++] = Eigen::Vector3d(p.x(), p.y(), p.z());
+    }
+    Eigen::Vector3d n = (x[1] - x[0]).cross(x[2] - x[0]);
+    if (n.norm() <= 0.0) continue;
+    n.normalize();
+    if (n.dot(x[0]) - n.dot(centre) <= 0.0) {
+      throw std::runtime_error("convex hull: the centre lies outside the hull");
+    }
+    planes.emplace_back(n, n.dot(x[0]));
+  }
+  auto reach = [&](const Eigen::Vector3d& u) {  // distance from the centre to the hull along u
+    double t = std::numeric_limits<double>::infinity();
+    for (const auto& [n, d] : planes) {
+      const double nu = n.dot(u);
+      if (nu > 1e-12) t = std::min(t, (d - n.dot(centre)) / nu);
+    }
+    return t;
+  };
+  double mean = 0.0;
+  for (const auto& p : points) mean += (p - centre).norm();
+  mean /= static_cast<double>(points.size());
+  // A unit sphere at the centre, each vertex moved out to the (inflated) hull.
+  Ellipsoid unit;
+  unit.centre = centre;
+  unit.radii = Eigen::Vector3d::Constant(mean);
+  TinMesh mesh = MakeEllipsoidMesh(unit, edge_length);
+  for (auto vh : mesh.vertices()) {
+    const Eigen::Vector3d u = (ToEigen(mesh.point(vh)) - centre).normalized();
+    mesh.set_point(vh, ToOpenMesh(centre + (1.0 + inflate) * reach(u) * u));
+  }
+  UpdateVertexNormals(&mesh);
+  return mesh;
+}
 
 TinMesh MakeEllipsoidMesh(const Ellipsoid& ellipsoid, double edge_length) {
   if (!(edge_length > 0.0)) throw std::invalid_argument("MakeEllipsoidMesh: edge_length must be > 0");

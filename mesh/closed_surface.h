@@ -26,6 +26,15 @@ struct Ellipsoid {
 // set. 20 frequency^2 faces, 10 frequency^2 + 2 vertices.
 TinMesh MakeEllipsoidMesh(const Ellipsoid& ellipsoid, double edge_length);
 
+// The convex hull of `points` (CGAL), grown by `inflate` (relative, about `centre`), as
+// an evenly triangulated star-shaped mesh: the geodesic sphere's directions from
+// `centre` (which must lie inside the hull) are cut with the hull. The sphere's
+// frequency gives edges of about edge_length at the hull's mean distance from the
+// centre; flat hull faces stretch some edges (the engine's quality pass splits them).
+// Throws std::runtime_error when the points span no volume or the centre is outside.
+TinMesh MakeHullMesh(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& centre,
+                     double edge_length, double inflate);
+
 // Mesh from points and triangles. Throws std::runtime_error naming `source_name` when a
 // triangle refers to a missing vertex, is degenerate, or OpenMesh refuses it
 // (non-manifold edge or vertex). Vertex normals set.

@@ -80,6 +80,32 @@ TEST(ClosedSurface, FindsHolesAndSelfIntersections) {
   EXPECT_EQ(merged.vertices, static_cast<int>(points.size()));
 }
 
+TEST(ClosedSurface, HullMeshLiesOnTheInflatedHull) {
+  // Points inside and on a 0.4 x 0.2 x 0.1 box: the hull is the box.
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i <= 4; ++i) {
+    for (int j = 0; j <= 4; ++j) {
+      for (int k = 0; k <= 4; ++k) points.emplace_back(0.1 * i, 0.05 * j, 0.025 * k);
+    }
+  }
+  const Eigen::Vector3d centre(0.2, 0.1, 0.05);
+  const TinMesh mesh = MakeHullMesh(points, centre, 0.03, 0.1);
+  double worst = 0.0;
+  for (auto vh : mesh.vertices()) {
+    // On the box grown by 10 % about the centre: the largest scaled coordinate is 1.
+    const Eigen::Vector3d d = (ToEigen(mesh.point(vh)) - centre).cwiseQuotient(Eigen::Vector3d(0.22, 0.11, 0.055));
+    worst = std::max(worst, std::abs(d.cwiseAbs().maxCoeff() - 1.0));
+  }
+  EXPECT_LT(worst, 1e-9);
+  const ClosedSurfaceCheck check = CheckClosedSurface(mesh);
+  EXPECT_TRUE(check.closed) << check.Brief();
+  EXPECT_FALSE(check.self_intersecting) << check.Brief();
+  // Triangles spanning the box's edges and corners cut a little off.
+  EXPECT_LE(check.volume, 0.44 * 0.22 * 0.11);
+  EXPECT_GT(check.volume, 0.9 * 0.44 * 0.22 * 0.11);
+  EXPECT_THROW(MakeHullMesh(points, Eigen::Vector3d(1.0, 0.0, 0.0), 0.03, 0.1), std::runtime_error);
+}
+
 TEST(ClosedSurface, TinFromTrianglesNamesTheSourceOfBadInput) {
   const std::vector<Eigen::Vector3d> points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   try {
