@@ -252,16 +252,23 @@ ClosedSurfaceCheck CheckClosedSurface(const std::vector<Eigen::Vector3d>& points
   return check;
 }
 
-ClosedSurfaceCheck CheckClosedSurface(const TinMesh& mesh) {
-  std::vector<Eigen::Vector3d> points;
-  std::vector<Eigen::Vector3i> triangles;
-  for (auto vh : mesh.vertices()) points.push_back(ToEigen(mesh.point(vh)));
+void TinPointsAndTriangles(const TinMesh& mesh, std::vector<Eigen::Vector3d>* points,
+                           std::vector<Eigen::Vector3i>* triangles) {
+  points->clear();
+  triangles->clear();
+  for (auto vh : mesh.vertices()) points->push_back(ToEigen(mesh.point(vh)));
   for (auto fh : mesh.faces()) {
     Eigen::Vector3i t;
     int k = 0;
     for (auto vh : mesh.fv_range(fh)) t[k++] = vh.idx();
-    triangles.push_back(t);
+    triangles->push_back(t);
   }
+}
+
+ClosedSurfaceCheck CheckClosedSurface(const TinMesh& mesh) {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<Eigen::Vector3i> triangles;
+  TinPointsAndTriangles(mesh, &points, &triangles);
   return CheckClosedSurface(points, triangles, 0.0);
 }
 

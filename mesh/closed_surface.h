@@ -42,6 +42,10 @@ TinMesh TinFromTriangles(const std::vector<Eigen::Vector3d>& points,
                          const std::vector<Eigen::Vector3i>& triangles,
                          const std::string& source_name);
 
+// The mesh's points and triangles (vertex and face order kept).
+void TinPointsAndTriangles(const TinMesh& mesh, std::vector<Eigen::Vector3d>* points,
+                           std::vector<Eigen::Vector3i>* triangles);
+
 struct ClosedSurfaceCheck {
   int vertices = 0;             // after merging coincident points
   int triangles = 0;

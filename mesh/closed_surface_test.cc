@@ -53,13 +53,7 @@ TEST(ClosedSurface, FindsHolesAndSelfIntersections) {
   const TinMesh mesh = MakeEllipsoidMesh(Tilted(), 0.1);
   std::vector<Eigen::Vector3d> points;
   std::vector<Eigen::Vector3i> triangles;
-  for (auto vh : mesh.vertices()) points.push_back(ToEigen(mesh.point(vh)));
-  for (auto fh : mesh.faces()) {
-    Eigen::Vector3i t;
-    int k = 0;
-    for (auto vh : mesh.fv_range(fh)) t[k++] = vh.idx();
-    triangles.push_back(t);
-  }
+  TinPointsAndTriangles(mesh, &points, &triangles);
   // One triangle missing: a hole of 3 border edges.
   std::vector<Eigen::Vector3i> holed(triangles.begin() + 1, triangles.end());
   const ClosedSurfaceCheck hole = CheckClosedSurface(points, holed);

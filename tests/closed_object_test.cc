@@ -22,6 +22,27 @@
 namespace facets {
 namespace {
 
+// Issue 9's acceptance on a closed object: TIN and surface facets closed and free of
+// self-intersections; object median distance <= 0.3 GSD, completeness >= 90 % at 1 GSD.
+void ExpectClosedAndAccurate(const Reconstruction& r, const std::string& truth_dir, double gsd) {
+  const ClosedSurfaceCheck tin = CheckClosedSurface(r.mesh);
+  const ClosedSurfaceCheck facets = CheckClosedSurface(r.tessellation.points, r.tessellation.triangles);
+  std::cout << "TIN: " << tin.Brief() << "\nsurface: " << facets.Brief() << "\n";
+  EXPECT_TRUE(tin.closed);
+  EXPECT_FALSE(tin.self_intersecting);
+  EXPECT_TRUE(facets.closed);
+  EXPECT_FALSE(facets.self_intersecting);
+  MeshData surface;
+  surface.vertices = r.tessellation.points;
+  surface.faces = r.tessellation.triangles;
+  const EvaluationReport score = Evaluate(ReadTruthScene(truth_dir), surface);
+  std::cout << score.Table();
+  const RegionScore* object = score.Region("object");
+  ASSERT_NE(object, nullptr);
+  EXPECT_LE(object->accuracy.median, 0.3 * gsd);
+  EXPECT_GE(object->completeness.within[1], 0.90);  // within 1 ground pixel
+}
+
 TEST(ClosedStart, EllipsoidFitIgnoresTheFloor) {
   Ellipsoid truth;
   truth.centre = Eigen::Vector3d(0.05, -0.02, 0.6);
@@ -83,24 +104,7 @@ TEST(ClosedObject, SmallObjectFromTheAutomaticClosedStart) {
   // (docs/SCENES.md); the seeds, with texture from 8 pixels up, reach 4.
   EXPECT_LT(finest.sigma0, 12.0);
 
-  const ClosedSurfaceCheck tin = CheckClosedSurface(r.mesh);
-  const ClosedSurfaceCheck facets = CheckClosedSurface(r.tessellation.points, r.tessellation.triangles);
-  std::cout << "TIN: " << tin.Brief() << "\nsurface: " << facets.Brief() << "\n";
-  EXPECT_TRUE(tin.closed);
-  EXPECT_FALSE(tin.self_intersecting);
-  EXPECT_TRUE(facets.closed);
-  EXPECT_FALSE(facets.self_intersecting);
-
-  MeshData surface;
-  surface.vertices = r.tessellation.points;
-  surface.faces = r.tessellation.triangles;
-  const EvaluationReport score = Evaluate(ReadTruthScene(dir), surface);
-  std::cout << score.Table();
-  const RegionScore* object = score.Region("object");
-  ASSERT_NE(object, nullptr);
-  const double gsd = scene.ground_pixel_size;
-  EXPECT_LE(object->accuracy.median, 0.3 * gsd);
-  EXPECT_GE(object->completeness.within[1], 0.90);  // within 1 ground pixel
+  ExpectClosedAndAccurate(r, dir, scene.ground_pixel_size);
 }
 
 // A given start mesh 16 % too small, before a black background: object lifting along
@@ -117,13 +121,7 @@ TEST(ClosedObject, GivenStartMeshLiftedBeforeABlackBackground) {
   sphere.radii = Eigen::Vector3d::Constant(0.42);  // the blob's mean radius is about 0.5
   const TinMesh start = MakeEllipsoidMesh(sphere, 0.1);
   MeshData start_data;
-  for (auto vh : start.vertices()) start_data.vertices.push_back(ToEigen(start.point(vh)));
-  for (auto fh : start.faces()) {
-    Eigen::Vector3i t;
-    int k = 0;
-    for (auto vh : start.fv_range(fh)) t[k++] = vh.idx();
-    start_data.faces.push_back(t);
-  }
+  TinPointsAndTriangles(start, &start_data.vertices, &start_data.faces);
   const std::string start_file = dir + "/start.ply";
   WritePly(start_file, start_data);
 
@@ -154,18 +152,7 @@ TEST(ClosedObject, GivenStartMeshLiftedBeforeABlackBackground) {
   std::cout << "finest: " << finest.background << " background pixels, " << finest.rejected
             << " rejected\n";
   EXPECT_GT(finest.background, 0);
-  const ClosedSurfaceCheck tin = CheckClosedSurface(r.mesh);
-  EXPECT_TRUE(tin.closed);
-  EXPECT_FALSE(tin.self_intersecting);
-  MeshData surface;
-  surface.vertices = r.tessellation.points;
-  surface.faces = r.tessellation.triangles;
-  const EvaluationReport score = Evaluate(ReadTruthScene(dir), surface);
-  std::cout << score.Table();
-  const RegionScore* object = score.Region("object");
-  ASSERT_NE(object, nullptr);
-  EXPECT_LE(object->accuracy.median, 0.3 * scene.ground_pixel_size);
-  EXPECT_GE(object->completeness.within[1], 0.90);
+  ExpectClosedAndAccurate(r, dir, scene.ground_pixel_size);
 }
 
 // Robust weights: a saturated spot (a specular highlight, 40 x 40 pixels of 255) on the
