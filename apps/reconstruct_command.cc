@@ -20,6 +20,7 @@
 #include "io/atomic_file.h"
 #include "io/colmap_io.h"
 #include "io/project_io.h"
+#include "mesh/closed_surface.h"
 
 namespace facets {
 namespace {
@@ -40,6 +41,12 @@ struct ReconstructArgs {
   int lifting_steps = 0;
   double lifting_range = 30.0;
   std::vector<double> roi;
+  std::string start_mesh;
+  std::string closed_shape = ClosedStartOptions().shape;
+  double closed_lifting_range = ClosedStartOptions().lifting_range;
+  double background_below = AdjustmentOptions().background_below;
+  double robust = AdjustmentOptions().robust_k;
+  double reject = AdjustmentOptions().reject_k;
   bool colour = false;
   int window_faces = WindowPartitionOptions().max_faces;
   int window_margin = WindowPartitionOptions().margin_rings;
@@ -88,7 +95,10 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.adjustment.max_iterations = args.max_iterations;
   options.adjustment.crease_angle_deg = args.crease_angle;
   options.start_height = args.start_height;
-  options.start = StartSurfaceFromName(args.start);
+  // --start closed selects the closed start (engine/start_closed.h); the others are the
+  // open starts of engine/start_tiepoints.h.
+  options.start_closed = args.start == "closed";
+  if (!options.start_closed) options.start = StartSurfaceFromName(args.start);
   if (args.start_plane == "auto") {
     options.start_plane = ReconstructionOptions::StartPlane::kAuto;
   } else if (args.start_plane == "horizontal") {
@@ -101,6 +111,13 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.lifting_steps = args.lifting_steps;
   options.lifting_range = args.lifting_range;
   options.colour = args.colour;
+  options.closed.mesh_file = args.start_mesh;
+  options.closed.shape = args.closed_shape;
+  options.closed.lifting_steps = args.lifting_steps;
+  options.closed.lifting_range = args.closed_lifting_range;
+  options.adjustment.background_below = args.background_below;
+  options.adjustment.robust_k = args.robust;
+  options.adjustment.reject_k = args.reject;
   options.windows.partition.max_faces = args.window_faces;
   options.windows.partition.margin_rings = args.window_margin;
   options.windows.sweeps = args.sweeps;
@@ -141,6 +158,19 @@ void RunReconstruct(const ReconstructArgs& args) {
   const std::filesystem::path out(args.out);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (options.start_closed || !options.closed.mesh_file.empty()) {
+    // A closed start must come out closed and without self-intersections.
+    say("closed surface: TIN " + CheckClosedSurface(result.mesh).Brief() + "; surface facets " +
+        CheckClosedSurface(result.tessellation.points, result.tessellation.triangles).Brief());
+  }
+  const WindowReport& finest = result.report.levels.back().window;
+  if (finest.background > 0 || finest.rejected > 0 || finest.downweighted > 0) {
+    const double all = static_cast<double>(std::max<long long>(finest.observations + finest.rejected, 1));
+    say("finest level: " + std::to_string(finest.background) + " background pixels dropped, " +
+        std::to_string(finest.rejected) + " observations rejected (" +
+        std::to_string(100.0 * finest.rejected / all) + " %), " + std::to_string(finest.downweighted) +
+        " down-weighted (" + std::to_string(100.0 * finest.downweighted / all) + " %)");
+  }
   int flagged = 0;
   for (uint8_t f : result.vertex_flags) flagged += f != 0 ? 1 : 0;
   say("summary: " + std::to_string(result.mesh.n_vertices()) + " vertices (" + std::to_string(flagged) +
@@ -170,9 +200,10 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--crease-angle", args->crease_angle, "crease detection angle (deg); 180 = pure G1")->capture_default_str();
   sub->add_option("--start-height", args->start_height, "height of the start plane (local Z)");
   sub->add_option("--start", args->start,
-                  "start surface: auto | plane | tiepoints (auto: tie points when >= 20 lie in the "
-                  "region and neither --start-height nor lifting is given)")
-      ->check(CLI::IsMember({"auto", "plane", "tiepoints"}))
+                  "start surface: auto | plane | tiepoints | closed (auto: tie points when >= 20 lie in "
+                  "the region and neither --start-height nor lifting is given; closed: an ellipsoid "
+                  "or hull around the tie points, for objects)")
+      ->check(CLI::IsMember({"auto", "plane", "tiepoints", "closed"}))
       ->capture_default_str();
   sub->add_option("--start-plane", args->start_plane,
                   "auto (fitted to the tie points when tilted > 45 deg, e.g. a facade) | horizontal | fitted")
@@ -180,6 +211,15 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--lifting-steps", args->lifting_steps, "object lifting: start heights to try (0 = off)")->capture_default_str();
   sub->add_option("--lifting-range", args->lifting_range, "object lifting: search interval (m)")->capture_default_str();
   sub->add_option("--roi", args->roi, "region of interest: xmin ymin zmin xmax ymax zmax (global)")->expected(6);
+  sub->add_option("--start-mesh", args->start_mesh, "closed (or any) start mesh, PLY or OBJ, local coordinates");
+  sub->add_option("--closed-shape", args->closed_shape,
+                  "automatic closed start: ellipsoid | hull (convex hull of the tie points)")->capture_default_str();
+  sub->add_option("--closed-lifting-range", args->closed_lifting_range,
+                  "object lifting of a closed start: scale factors over 1 +- range/2")->capture_default_str();
+  sub->add_option("--background-below", args->background_below,
+                  "pixels with grey value at or below this are background, no observation (negative = off)")->capture_default_str();
+  sub->add_option("--robust", args->robust, "Huber weights beyond K robust sigmas (0 = off)")->capture_default_str();
+  sub->add_option("--reject", args->reject, "reject residuals beyond R robust sigmas (0 = off)")->capture_default_str();
   sub->add_flag("--colour", args->colour, "one grey value per channel (geometry shared)");
   sub->add_option("--window-faces", args->window_faces, "most core triangles per window")->capture_default_str();
   sub->add_option("--window-margin", args->window_margin, "face rings around a window's core")->capture_default_str();

@@ -56,6 +56,9 @@ void AdjustmentOptions::Check() const {
   if (!(grey_ridge >= 0.0)) fail("grey_ridge must be >= 0");
   if (min_views < 0) fail("min_views must be >= 0");
   if (!(max_sigma >= 0.0)) fail("max_sigma must be >= 0");
+  if (!(robust_k >= 0.0)) fail("robust_k must be >= 0");
+  if (!(reject_k >= 0.0)) fail("reject_k must be >= 0");
+  if (robust_k > 0.0 && reject_k > 0.0 && reject_k < robust_k) fail("reject_k must be >= robust_k");
   std::string error;
   if (!pcg.Check(&error)) fail(error);
 }

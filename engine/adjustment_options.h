@@ -72,6 +72,19 @@ struct AdjustmentOptions {
 
   // Rays at |cos incidence| below this are no observation.
   double min_cos_incidence = 0.1;
+
+  // Background: pixels whose grey value (mean over the channels) is at or below this
+  // give no observation, e.g. the black backdrop of an object photographed on a
+  // turntable: untextured, it would pull the surface wherever the surface covers it.
+  // Negative = off.
+  double background_below = -1.0;
+  // Robust weighting of gross residuals (pixels that fit no surface: background seen
+  // past a silhouette, specular spots, moving things). Per iteration the robust scale
+  // s = 1.4826 x median |residual| of the window's observations; a residual beyond
+  // robust_k s gets the Huber weight robust_k s / |residual|, one beyond reject_k s is
+  // rejected (no observation). 0 = off (each on its own).
+  double robust_k = 0.0;
+  double reject_k = 0.0;
   // Tiny ridge on grey and radiometric unknowns (relative to the mean diagonal) so
   // nodes no pixel sees keep their value instead of making N singular.
   double grey_ridge = 1e-8;

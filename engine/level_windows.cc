@@ -231,6 +231,9 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
     s.converged = s.converged && r.converged;
     s.observations += r.observations;
     s.pseudo_observations += r.pseudo_observations;
+    s.background += r.background;
+    s.rejected += r.rejected;
+    s.downweighted += r.downweighted;
     s.unknowns += r.unknowns;
     s.redundancy += r.redundancy;
     s.cg_iterations_total += r.cg_iterations_total;

@@ -214,6 +214,12 @@ std::string ReconstructionReport::Json() const {
                      {"cg_iterations", w.cg_iterations_total},
                      {"observations", w.observations},
                      {"pseudo_observations", w.pseudo_observations},
+                     {"background_pixels", w.background},
+                     {"rejected", w.rejected},
+                     {"rejected_share", w.observations + w.rejected > 0
+                                            ? static_cast<double>(w.rejected) / (w.observations + w.rejected)
+                                            : 0.0},
+                     {"downweighted", w.downweighted},
                      {"unknowns", w.unknowns},
                      {"redundancy", w.redundancy},
                      {"sigma0", w.sigma0},
@@ -227,6 +233,8 @@ std::string ReconstructionReport::Json() const {
              {"observations", it.observations},
              {"cg_iterations", it.cg_iterations},
              {"sigma0", it.sigma0},
+             {"robust_scale", it.robust_scale},
+             {"rejected", it.rejected},
              {"max_dn", {it.max_dn_interior, it.max_dn_border, it.max_dn_corner}},
              {"seconds", {{"cast", it.seconds_cast},
                           {"linearise", it.seconds_linearise},
@@ -267,10 +275,18 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
   if (block.images.size() < 2) throw std::runtime_error("reconstruction needs at least 2 images");
   Reconstruction result;
   const RegionOfInterest roi = ChooseRoi(block, options);
-  double start_height = ChooseStartHeight(block, roi, options);
+  // A closed start (objects) replaces the plane; its centre sets the ground pixel.
+  std::optional<ClosedStart> closed;
+  if (options.start_closed || !options.closed.mesh_file.empty()) {
+    closed = PrepareClosedStart(block, roi, options.closed);
+    say(closed->Describe());
+  }
+  double start_height = closed ? closed->centre.z() : ChooseStartHeight(block, roi, options);
   Eigen::Vector3d centre = 0.5 * (roi.min + roi.max);
   centre.z() = start_height;
-  const std::optional<FittedPlane> fitted = ChooseFittedPlane(block, roi, options);
+  // A closed start needs no plane; otherwise a facade's tie points tilt it (start_fitted_plane.h).
+  std::optional<FittedPlane> fitted;
+  if (!closed) fitted = ChooseFittedPlane(block, roi, options);
   if (fitted) {
     centre = fitted->centre;
     say("start plane fitted to " + std::to_string(fitted->kept) + " of " + std::to_string(fitted->total) +
@@ -278,6 +294,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
         " m, extent " + std::to_string((fitted->max_uv - fitted->min_uv).x()) + " x " +
         std::to_string((fitted->max_uv - fitted->min_uv).y()) + " m");
   }
+  if (closed) centre = closed->centre;
   const double gsd0 = GroundPixel(block, centre);
   const int num_levels = options.levels;
 
@@ -321,7 +338,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
   const int coarsest = num_levels - 1;
   if (options.lifting_steps > 0 && fitted) {
     say("object lifting skipped: it searches heights of a horizontal plane, the start plane is fitted");
-  } else if (options.lifting_steps > 0) {
+  } else if (options.lifting_steps > 0 && !closed) {
     say("stage object lifting: " + std::to_string(options.lifting_steps) + " start heights over " +
         std::to_string(options.lifting_range) + " m");
     for (int s = 0; s < options.lifting_steps; ++s) {
@@ -355,7 +372,12 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
   result.report.start_height = start_height;
 
   TinMesh mesh;
-  if (fitted) {
+  if (closed) {
+    mesh = MakeClosedStartMesh(*closed, options.closed, edge_length(coarsest),
+                               options.closed.lifting_steps > 0 ? level_images(coarsest) : std::vector<LevelImage>{},
+                               level_options(coarsest), &result.report.lifting, say);
+    result.report.start_surface = "closed";
+  } else if (fitted) {
     mesh = MakeFittedPlaneMesh(*fitted, edge_length(coarsest));
     result.report.start_surface = "fitted plane";
   } else {

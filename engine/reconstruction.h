@@ -16,6 +16,7 @@
 #include "engine/adjustment_options.h"
 #include "engine/level_windows.h"
 #include "engine/pyramid.h"
+#include "engine/start_closed.h"
 #include "engine/start_tiepoints.h"
 #include "engine/window_adjustment.h"
 #include "io/image_block.h"
@@ -57,6 +58,12 @@ struct ReconstructionOptions {
   // each, and start from the best. 0 steps = off.
   int lifting_steps = 0;
   double lifting_range = 30.0;
+  // Closed start for objects seen from all around (engine/start_closed.h) instead of
+  // the plane: the ellipsoid fitted to the tie points, or closed.mesh_file when given.
+  // Object lifting then scales it about its centre (closed.lifting_steps, the plane's
+  // lifting_steps are not used).
+  bool start_closed = false;
+  ClosedStartOptions closed;
   // Region of interest (local); default: the block's, else the tie points' extent.
   std::optional<RegionOfInterest> roi;
   // Tiled level images in this folder, read per window through a cache of

@@ -52,6 +52,8 @@ struct Partial {
   Eigen::VectorXd rhs;
   double lpl = 0.0;
   long long count = 0;
+  long long rejected = 0;
+  long long downweighted = 0;
 };
 
 }  // namespace
@@ -256,6 +258,46 @@ long long WindowAdjustment::CastAll(std::vector<std::vector<PixelObservation>>* 
   return total;
 }
 
+long long WindowAdjustment::DropBackground(std::vector<std::vector<PixelObservation>>* casts) const {
+  if (options_.background_below < 0.0) return 0;
+  long long dropped = 0;
+  for (size_t k = 0; k < casts->size(); ++k) {
+    const ImagePlanes& pixels = *images_[k].pixels;
+    auto& list = (*casts)[k];
+    const size_t before = list.size();
+    list.erase(std::remove_if(list.begin(), list.end(),
+                              [&](const PixelObservation& obs) {
+                                double sum = 0.0;
+                                for (int c = 0; c < channels_; ++c) sum += pixels.at(c, obs.x, obs.y);
+                                return sum / channels_ <= options_.background_below;
+                              }),
+               list.end());
+    dropped += static_cast<long long>(before - list.size());
+  }
+  return dropped;
+}
+
+double WindowAdjustment::RobustScale(const std::vector<std::vector<PixelObservation>>& casts) const {
+  std::vector<float> residuals;
+  for (size_t k = 0; k < casts.size(); ++k) {
+    const ImagePlanes& pixels = *images_[k].pixels;
+    for (const PixelObservation& obs : casts[k]) {
+      const Eigen::Vector3i& tri = tess_.triangles[obs.facet];
+      for (int c = 0; c < channels_; ++c) {
+        const double object = (1.0 - obs.u - obs.v) * grey_[tri[0] * channels_ + c] +
+                              obs.u * grey_[tri[1] * channels_ + c] + obs.v * grey_[tri[2] * channels_ + c];
+        const auto& rad = radiometry_[k][c];
+        const double predicted = (object - rad[0]) / rad[1];
+        residuals.push_back(static_cast<float>(std::abs(pixels.at(c, obs.x, obs.y) - predicted)));
+      }
+    }
+  }
+  if (residuals.empty()) return 0.0;
+  auto middle = residuals.begin() + residuals.size() / 2;
+  std::nth_element(residuals.begin(), middle, residuals.end());
+  return 1.4826 * *middle;
+}
+
 void WindowAdjustment::InitialiseGrey(const std::vector<std::vector<PixelObservation>>& casts) {
   const size_t num_nodes = tess_.points.size();
   std::vector<double> sum(num_nodes * channels_, 0.0), weight(num_nodes, 0.0);
@@ -333,6 +375,20 @@ double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservati
           if (!lin.valid) continue;
           const double g = pixels.at(c, obs.x, obs.y);
           const double l = g - lin.predicted;
+          // Robust weight (AdjustmentOptions::robust_k, reject_k): w scales the
+          // observation's row, so the normal equations get w a a' and w a l.
+          double w = 1.0;
+          if (robust_scale_ > 0.0) {
+            const double ratio = std::abs(l) / robust_scale_;
+            if (options_.reject_k > 0.0 && ratio > options_.reject_k) {
+              ++p.rejected;
+              continue;
+            }
+            if (options_.robust_k > 0.0 && ratio > options_.robust_k) {
+              w = options_.robust_k / ratio;
+              ++p.downweighted;
+            }
+          }
           const double a[6] = {lin.dn[0], lin.dn[1], lin.dn[2], lin.grey[0], lin.grey[1], lin.grey[2]};
           const int64_t* table = &slots_[(static_cast<size_t>(f) * channels_ + c) * kLocal * kLocal];
           int unknown[6];
@@ -340,11 +396,11 @@ double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservati
           for (int i = 0; i < 3; ++i) unknown[3 + i] = grey_offset_ + tri[i] * channels_ + c;
           for (int i = 0; i < 6; ++i) {
             if (unknown[i] < 0) continue;
-            p.rhs[unknown[i]] += a[i] * l;
+            p.rhs[unknown[i]] += w * a[i] * l;
             const int64_t* row = table + local[i] * kLocal;
             for (int j = 0; j < 6; ++j) {
               const int64_t slot = row[local[j]];
-              if (slot >= 0) p.values[slot] += a[i] * a[j];
+              if (slot >= 0) p.values[slot] += w * a[i] * a[j];
             }
           }
           const std::array<int, 2>& rad_unknown = rad_unknown_[k][c];
@@ -352,19 +408,19 @@ double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservati
           for (int r = 0; r < 2; ++r) {
             const int ur = rad_unknown[r];
             if (ur < 0) continue;
-            p.rhs[ur] += a_rad[r] * l;
+            p.rhs[ur] += w * a_rad[r] * l;
             const int64_t rad_col = ur - rad_offset_;
             for (int i = 0; i < 6; ++i) {
               if (unknown[i] < 0) continue;
-              const double product = a[i] * a_rad[r];
+              const double product = w * a[i] * a_rad[r];
               p.values[row_ptr[unknown[i] + 1] - num_rad_ + rad_col] += product;
               p.values[row_ptr[ur] + unknown[i]] += product;
             }
             for (int s = 0; s < 2; ++s) {
-              if (rad_unknown[s] >= 0) p.values[row_ptr[ur] + rad_unknown[s]] += a_rad[r] * a_rad[s];
+              if (rad_unknown[s] >= 0) p.values[row_ptr[ur] + rad_unknown[s]] += w * a_rad[r] * a_rad[s];
             }
           }
-          p.lpl += l * l;
+          p.lpl += w * l * l;
           ++p.count;
         }
       }
@@ -376,7 +432,11 @@ double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservati
   *rhs = Eigen::VectorXd::Zero(num_unknowns_);
   double lpl = 0.0;
   *count = 0;
+  rejected_ = 0;
+  downweighted_ = 0;
   for (const Partial& p : partials) {
+    rejected_ += p.rejected;
+    downweighted_ += p.downweighted;
     tbb::parallel_for(tbb::blocked_range<int64_t>(0, nnz, 1 << 16),
                       [&](const tbb::blocked_range<int64_t>& range) {
       for (int64_t i = range.begin(); i != range.end(); ++i) values[i] += p.values[i];
@@ -481,11 +541,15 @@ WindowReport WindowAdjustment::Run() {
     it.iteration = iteration;
     auto start = std::chrono::steady_clock::now();
     it.observations = CastAll(&casts);
+    it.background = DropBackground(&casts);
+    it.observations -= it.background;
     it.seconds_cast = Seconds(start);
     if (it.observations == 0) {
       throw std::runtime_error("WindowAdjustment: no image sees the window (0 observations)");
     }
     if (grey_.empty() || (iteration == 1 && !grey_given_)) InitialiseGrey(casts);
+    robust_scale_ = options_.robust_k > 0.0 || options_.reject_k > 0.0 ? RobustScale(casts) : 0.0;
+    it.robust_scale = robust_scale_;
 
     start = std::chrono::steady_clock::now();
     long long count = 0, pseudo = 0;
@@ -514,8 +578,13 @@ WindowReport WindowAdjustment::Run() {
     const long long redundancy = count + pseudo - determined;
     const double vpv = std::max(lpl - solution.dot(rhs), 0.0);
     it.sigma0 = redundancy > 0 ? std::sqrt(vpv / redundancy) : 0.0;
+    it.rejected = rejected_;
+    it.downweighted = downweighted_;
     report.observations = count;
     report.pseudo_observations = pseudo;
+    report.background = it.background;
+    report.rejected = rejected_;
+    report.downweighted = downweighted_;
     report.unknowns = determined;
     report.redundancy = redundancy;
 

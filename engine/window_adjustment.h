@@ -48,6 +48,13 @@ struct IterationReport {
   long long observations = 0;
   int cg_iterations = 0;
   double sigma0 = 0.0;           // of this linearisation, grey values
+  // AdjustmentOptions::background_below / robust_k / reject_k: pixels dropped as
+  // background, observations rejected and down-weighted, and the robust scale
+  // (grey values) they were judged by.
+  long long background = 0;
+  long long rejected = 0;
+  long long downweighted = 0;
+  double robust_scale = 0.0;
   double max_dn_interior = 0.0;  // object units
   double max_dn_border = 0.0;
   double max_dn_corner = 0.0;
@@ -64,6 +71,11 @@ struct WindowReport {
   double sigma0 = 0.0;  // grey values, of the last linearisation
   long long observations = 0;
   long long pseudo_observations = 0;
+  // Of the last iteration: background pixels, rejected and down-weighted observations
+  // (rejected ones are not in `observations`).
+  long long background = 0;
+  long long rejected = 0;
+  long long downweighted = 0;
   int unknowns = 0;
   long long redundancy = 0;
   int cg_iterations_total = 0;
@@ -120,6 +132,10 @@ class WindowAdjustment {
   void BuildPattern();
   long long CastAll(std::vector<std::vector<PixelObservation>>* casts);
   void InitialiseGrey(const std::vector<std::vector<PixelObservation>>& casts);
+  // Drops background pixels (AdjustmentOptions::background_below); returns how many.
+  long long DropBackground(std::vector<std::vector<PixelObservation>>* casts) const;
+  // 1.4826 x the median absolute residual at the current values (0: no observations).
+  double RobustScale(const std::vector<std::vector<PixelObservation>>& casts) const;
   double Accumulate(const std::vector<std::vector<PixelObservation>>& casts,
                     Eigen::VectorXd* rhs, long long* count);
   double AccumulateCurvature(Eigen::VectorXd* rhs, long long* count);
@@ -142,6 +158,10 @@ class WindowAdjustment {
   std::vector<bool> crease_edges_;  // by edge, fixed for one Run
   std::vector<bool> crease_vertex_;  // vertices where creases separate face sectors
   std::vector<double> curvature_target_;  // adaptive regularisation, per vertex
+  // Robust weighting of the current iteration (0 = off) and what it did.
+  double robust_scale_ = 0.0;
+  long long rejected_ = 0;
+  long long downweighted_ = 0;
 
   // Topology tables (fixed for one adjustment).
   std::vector<std::array<int, 3>> face_vertices_;

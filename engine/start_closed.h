@@ -1,0 +1,91 @@
+// Closed start surfaces for objects photographed from all around (issue 9): instead of
+// the 2.5D start plane, a closed TIN around the object, refined by the same engine.
+//
+// - Given: a start mesh file (PLY/OBJ, io/ply_io.h), used as it is; edges longer than
+//   1.5x the coarsest level's edge length are split (mesh/local_ops.h QualityPass).
+// - Automatic: an ellipsoid fitted robustly to the tie points (a sphere first, by
+//   iteratively re-weighted least squares with Tukey weights on the distance to it,
+//   starting from the point the cameras' optical axes meet; then a general ellipsoid
+//   from the sphere's inliers, re-weighted the same way). Points of a floor or of a
+//   background the object stands before are far from any ellipsoid through the object
+//   and get weight 0. Triangulated as a geodesic ellipsoid with the coarsest level's
+//   edge length (mesh/closed_surface.h).
+// - Or the convex hull of those inlier tie points, grown a little (ClosedStartOptions::
+//   shape "hull"), for objects far from an ellipsoid (a temple, a box).
+// - Object lifting along the normals: the start scaled about its centre over a range
+//   of factors, one iteration each on the coarsest level; chosen by the sign change of
+//   the mean displacement (outward -> inward) and, among those, the smallest sigma0.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/adjustment_options.h"
+#include "engine/window_adjustment.h"
+#include "io/image_block.h"
+#include "mesh/closed_surface.h"
+#include "mesh/tin.h"
+
+namespace facets {
+
+struct LiftingTrial;
+
+struct EllipsoidFit {
+  Ellipsoid ellipsoid;
+  bool is_sphere = false;   // the general fit failed or was implausible
+  int points = 0;           // tie points offered
+  int inliers = 0;          // with weight > 0 in the final fit
+  double rms_distance = 0;  // of the inliers to the ellipsoid (radial), m
+  std::vector<bool> inlier;  // per point offered
+};
+
+// The least-squares meeting point of the images' optical axes (the volume the cameras
+// look at). Throws std::runtime_error for fewer than 2 images or parallel axes.
+Eigen::Vector3d CameraAxesMeet(const ImageBlock& block);
+
+// Robust ellipsoid through `points` (>= 10), starting from `centre_guess`.
+// Throws std::runtime_error when too few points remain.
+EllipsoidFit FitStartEllipsoid(const std::vector<Eigen::Vector3d>& points,
+                               const Eigen::Vector3d& centre_guess);
+
+struct ClosedStartOptions {
+  // Start mesh file; empty: the shape fitted to the tie points.
+  std::string mesh_file;
+  // Automatic start: "ellipsoid" (fitted) or "hull" (convex hull of the ellipsoid
+  // fit's inlier tie points, grown by hull_inflate, for boxy objects).
+  std::string shape = "ellipsoid";
+  double hull_inflate = 0.05;
+  // Object lifting: scale factors over 1 +- range / 2 in `steps` steps; 0 steps = off.
+  int lifting_steps = 0;
+  double lifting_range = 0.4;
+  void Check() const;  // throws std::invalid_argument naming the option
+};
+
+// What the start is made from, decided before the pyramid (its centre sets the
+// ground pixel and so the edge lengths).
+struct ClosedStart {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  std::optional<EllipsoidFit> fit;    // automatic start
+  std::optional<TinMesh> given;       // start mesh file
+  std::vector<Eigen::Vector3d> hull_points;  // shape "hull": the fit's inliers
+  std::string Describe() const;
+};
+
+// Reads the start mesh, or fits the ellipsoid to the block's tie points inside `roi`
+// (all tie points when fewer than 10 lie inside). Errors name the file or say what is
+// missing.
+ClosedStart PrepareClosedStart(const ImageBlock& block, const RegionOfInterest& roi,
+                               const ClosedStartOptions& options);
+
+// The coarsest level's start TIN: the given mesh (long edges split) or the geodesic
+// ellipsoid with `edge_length`, then object lifting when options.lifting_steps > 0
+// (`images`: the coarsest level; `one`: its adjustment options). Every trial goes into
+// *trials (LiftingTrial::height holds the scale factor). Vertex normals set.
+TinMesh MakeClosedStartMesh(const ClosedStart& start, const ClosedStartOptions& options,
+                            double edge_length, const std::vector<LevelImage>& images,
+                            const AdjustmentOptions& one, std::vector<LiftingTrial>* trials,
+                            const std::function<void(const std::string&)>& say);
+
+}  // namespace facets
