@@ -41,7 +41,8 @@ for row in "${rows[@]}"; do
       --no-glb --no-vrml --no-rasters > "$run.log" 2>&1
     "$facets" evaluate --truth "$out/$scene/scene" --mesh "$run/surface.ply" > "$run.eval" 2>&1
     sigma0=$(grep -o '"sigma0_finest": [0-9.]*' "$run/report.json" | awk '{printf "%.2f", $2}')
-    iters=$(grep -o '"iterations": [0-9]*,' "$run/report.json" | grep -v per | head -3 | awk '{printf "%s%s", sep, $2; sep="/"}' | tr -d ',')
+    # Iterations of each level's summary (the per-window entries repeat them).
+    iters=$(python3 -c 'import json, sys; print("/".join(str(l["summary"]["iterations"]) for l in json.load(open(sys.argv[1]))["levels"]))' "$run/report.json")
     read -r rms zmin zmax < <(grep -A1 "^Height errors" "$run.eval" | tail -1 |
       sed -E 's/.*rms ([-0-9.]+) +mean [-0-9.]+ +min ([-0-9.]+) +max ([-0-9.]+).*/\1 \2 \3/')
     if [ "$lambda" = 2000 ]; then ss=$s2000; sr=$r2000; else ss=$s4000; sr=$r4000; fi
