@@ -18,4 +18,4 @@ out=out/default
   --out "$out/reconstruction" --levels 3
 ./build/apps/facets evaluate --truth "$out/scene" --mesh "$out/reconstruction/surface.ply" \
   --json "$out/evaluation.json"
-echo "run-default: products in $out/reconstruction (surface.ply/.glb/.wrl, tin.ply, ortho.tif, dsm.tif, sigma.tif, report.json) and $out/evaluation.json"
+echo "run-default: products in $out/reconstruction (surface.ply/.glb/.wrl, tin.ply, ortho.tif, dsm.tif, sigma.tif, preview.png, report.json) and $out/evaluation.json"
