@@ -16,6 +16,7 @@
 #include "scenes/evaluate.h"
 #include "scenes/renderer.h"
 #include "scenes/scene.h"
+#include "tests/rendered_scene.h"
 #include "scenes/truth_mesh.h"
 #include "tests/truth_start.h"
 
@@ -81,11 +82,11 @@ TEST(ClosedStart, EllipsoidFitIgnoresTheFloor) {
 }
 
 TEST(ClosedObject, SmallObjectFromTheAutomaticClosedStart) {
-  const Scene scene = LoadScene(std::string(FACETS_SOURCE_DIR) + "/tests/data/closed_object_small.json");
-  const std::string dir = testing::TempDir() + "/facets_closed_object_small";
-  RenderScene(scene, dir);
-  ImageBlock block = ReadColmapModel(dir + "/sparse", dir + "/images");
-  block.roi = scene.roi;
+  const RenderedScene rendered =
+      RenderAndRead("tests/data/closed_object_small.json", testing::TempDir() + "/facets_closed_object_small");
+  const Scene& scene = rendered.scene;
+  const std::string& dir = rendered.dir;
+  ImageBlock block = rendered.block;
 
   ReconstructionOptions options;
   options.levels = 2;
@@ -111,11 +112,11 @@ TEST(ClosedObject, SmallObjectFromTheAutomaticClosedStart) {
 // the normals (scaling about the centre) brings it to the object's size, and the
 // background pixels are dropped instead of pulling the surface.
 TEST(ClosedObject, GivenStartMeshLiftedBeforeABlackBackground) {
-  const Scene scene = LoadScene(std::string(FACETS_SOURCE_DIR) + "/tests/data/closed_object_black.json");
-  const std::string dir = testing::TempDir() + "/facets_closed_object_black";
-  RenderScene(scene, dir);
-  ImageBlock block = ReadColmapModel(dir + "/sparse", dir + "/images");
-  block.roi = scene.roi;
+  const RenderedScene rendered =
+      RenderAndRead("tests/data/closed_object_black.json", testing::TempDir() + "/facets_closed_object_black");
+  const Scene& scene = rendered.scene;
+  const std::string& dir = rendered.dir;
+  ImageBlock block = rendered.block;
   Ellipsoid sphere;
   sphere.centre = Eigen::Vector3d(0.0, 0.0, 0.6);
   sphere.radii = Eigen::Vector3d::Constant(0.42);  // the blob's mean radius is about 0.5
@@ -159,10 +160,11 @@ TEST(ClosedObject, GivenStartMeshLiftedBeforeABlackBackground) {
 // sunny roof plane in one image of the seed gable pair. Without robust weighting it
 // pulls the roof away; with --robust 2 --reject 5 its pixels are rejected.
 double GableRmsWithSpot(bool spot, bool robust, WindowReport* report) {
-  const Scene scene = LoadScene(std::string(FACETS_SOURCE_DIR) + "/scenes/data/seed_gable_parallel.json");
-  const std::string dir = testing::TempDir() + "/facets_robust_spot_gable";
-  RenderScene(scene, dir);
-  const ImageBlock block = ReadColmapModel(dir + "/sparse", dir + "/images");
+  const RenderedScene rendered =
+      RenderAndRead("scenes/data/seed_gable_parallel.json", testing::TempDir() + "/facets_robust_spot_gable");
+  const Scene& scene = rendered.scene;
+  ImageBlock block = rendered.block;
+  block.roi.reset();
   LoadedImages loaded;
   LoadLevelImages(block, /*grey=*/true, &loaded);
   if (spot) {

@@ -9,16 +9,16 @@
 #include "scenes/evaluate.h"
 #include "scenes/renderer.h"
 #include "scenes/scene.h"
+#include "tests/rendered_scene.h"
 
 namespace facets {
 namespace {
 
 TEST(Reconstruct, SeedGableRoofFromTiePointsWithPyramid) {
-  const Scene scene = LoadScene(std::string(FACETS_SOURCE_DIR) + "/scenes/data/seed_gable_parallel.json");
-  const std::string dir = testing::TempDir() + "/facets_reconstruct_seed_gable";
-  RenderScene(scene, dir);
-  ImageBlock block = ReadColmapModel(dir + "/sparse", dir + "/images");
-  block.roi = scene.roi;  // the 24 m x 24 m window; start height from the tie points
+  const RenderedScene rendered =
+      RenderAndRead("scenes/data/seed_gable_parallel.json", testing::TempDir() + "/facets_reconstruct_seed_gable");
+  const std::string& dir = rendered.dir;
+  ImageBlock block = rendered.block;  // the 24 m x 24 m window; start height from the tie points
 
   ReconstructionOptions options;
   options.levels = 3;

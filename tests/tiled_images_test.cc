@@ -9,16 +9,15 @@
 #include "io/colmap_io.h"
 #include "scenes/renderer.h"
 #include "scenes/scene.h"
+#include "tests/rendered_scene.h"
 
 namespace facets {
 namespace {
 
 TEST(TiledImages, SameSurfaceAsImagesInMemory) {
-  const Scene scene = LoadScene(std::string(FACETS_SOURCE_DIR) + "/scenes/data/seed_gable_parallel.json");
-  const std::string dir = testing::TempDir() + "/facets_tiled_images_seed_gable";
-  RenderScene(scene, dir);
-  ImageBlock block = ReadColmapModel(dir + "/sparse", dir + "/images");
-  block.roi = scene.roi;
+  const RenderedScene rendered =
+      RenderAndRead("scenes/data/seed_gable_parallel.json", testing::TempDir() + "/facets_tiled_images_seed_gable");
+  ImageBlock block = rendered.block;
   ReconstructionOptions options;
   options.levels = 3;
   options.windows.partition.max_faces = 100;  // several windows, each with its own regions
