@@ -9,6 +9,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "io/atomic_file.h"
 #include "scenes/evaluate.h"
@@ -23,6 +24,7 @@ struct EvaluateArgs {
   bool with_samples = false;
   std::optional<double> spacing_gsd;
   std::optional<int> min_views;
+  std::vector<double> roi;  // xmin ymin zmin xmax ymax zmax, empty = the truth's
 };
 
 
@@ -30,6 +32,17 @@ void RunEvaluate(const EvaluateArgs& args) {
   EvaluationOptions options;
   if (args.spacing_gsd) options.sample_spacing_gsd = *args.spacing_gsd;
   if (args.min_views) options.min_views = *args.min_views;
+  if (!args.roi.empty()) {
+    // A reconstruction of part of the scene is scored on that part only: truth outside
+    // it would count as missing.
+    RegionOfInterest roi;
+    roi.min = Eigen::Vector3d(args.roi[0], args.roi[1], args.roi[2]);
+    roi.max = Eigen::Vector3d(args.roi[3], args.roi[4], args.roi[5]);
+    if (!(roi.max.array() > roi.min.array()).all()) {
+      throw std::invalid_argument("--roi: every max must exceed its min");
+    }
+    options.roi = roi;
+  }
   const auto start = std::chrono::steady_clock::now();
   const EvaluationReport report = EvaluateFiles(args.truth, args.mesh, options);
   const double seconds =
@@ -61,6 +74,9 @@ void AddEvaluateCommand(CLI::App& app) {
   sub->add_option("--min-views", args->min_views,
                   "images that must see a truth sample for completeness (default 1)")
       ->check(CLI::NonNegativeNumber);
+  sub->add_option("--roi", args->roi,
+                  "score only inside xmin ymin zmin xmax ymax zmax (local; default: the truth's)")
+      ->expected(6);
   sub->callback([args] {
     try {
       RunEvaluate(*args);

@@ -51,6 +51,9 @@ struct ReconstructArgs {
   int window_faces = WindowPartitionOptions().max_faces;
   int window_margin = WindowPartitionOptions().margin_rings;
   int sweeps = LevelWindowOptions().sweeps;
+  int wall_passes = ReconstructionOptions().wall_passes;
+  std::string displacement = "normal";
+  bool no_fold_guard = false;
   bool no_occluders = false;
   bool tiled_images = false;
   double image_memory_mb = 1024.0;
@@ -121,6 +124,9 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.windows.partition.max_faces = args.window_faces;
   options.windows.partition.margin_rings = args.window_margin;
   options.windows.sweeps = args.sweeps;
+  options.wall_passes = args.wall_passes;
+  options.adjustment.displacement = DisplacementFromName(args.displacement);
+  options.adjustment.fold_guard = !args.no_fold_guard;
   options.windows.occluders = !args.no_occluders;
   // Level images in memory while they fit the budget, else tiled on disk and read per
   // window (pyramid: 4/3 of the originals; float per channel).
@@ -224,6 +230,14 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--window-faces", args->window_faces, "most core triangles per window")->capture_default_str();
   sub->add_option("--window-margin", args->window_margin, "face rings around a window's core")->capture_default_str();
   sub->add_option("--sweeps", args->sweeps, "sweeps over the windows of a level")->capture_default_str();
+  sub->add_option("--wall-passes", args->wall_passes,
+                  "per level: split edges walls stretched and adjust again, at most this often")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 10));
+  sub->add_option("--displacement", args->displacement,
+                  "normal (3D: walls stand up) | vertical (2.5D, for comparison)")
+      ->capture_default_str();
+  sub->add_flag("--no-fold-guard", args->no_fold_guard, "do not limit vertex steps that would fold the surface");
   sub->add_flag("--no-occluders", args->no_occluders, "windows do not see the surface around them");
   sub->add_flag("--tiled-images", args->tiled_images, "level images on disk, read per window (also when over --image-memory)");
   sub->add_option("--image-memory", args->image_memory_mb, "MB for level images in memory; more goes to tiled files")->capture_default_str();

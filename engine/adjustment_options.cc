@@ -20,6 +20,12 @@ RadiometricModel RadiometricModelFromName(const std::string& name) {
                               "' (known: none, constant, linear)");
 }
 
+Displacement DisplacementFromName(const std::string& name) {
+  if (name == "normal") return Displacement::kNormal;
+  if (name == "vertical") return Displacement::kVertical;
+  throw std::invalid_argument("unknown displacement '" + name + "' (known: normal, vertical)");
+}
+
 std::string RegularisationName(Regularisation r) {
   switch (r) {
     case Regularisation::kCurvature: return "curvature";

@@ -30,6 +30,11 @@ RadiometricModel RadiometricModelFromName(const std::string& name);  // none|con
 std::string RegularisationName(Regularisation r);
 std::string RadiometricModelName(RadiometricModel m);
 
+// Direction in which the vertices move (issue 7): along their normals (3D: walls can
+// stand up and overhang) or vertically only (a 2.5D height field, for comparison).
+enum class Displacement { kNormal, kVertical };
+Displacement DisplacementFromName(const std::string& name);  // normal|vertical
+
 struct AdjustmentOptions {
   Regularisation regularisation = Regularisation::kCurvature;
   // Weight of one vertex's curvature pseudo-observation, in units of the pixel
@@ -64,6 +69,11 @@ struct AdjustmentOptions {
   // Largest displacement allowed in one iteration (object units); larger steps of
   // the linearised solution are scaled down so the surface stays valid. 0 = off.
   double max_step = 0.0;
+  // Fold guard (mesh/surface_validity.h): a vertex step that would fold a triangle
+  // against its neighbours or reverse its normal is halved, and undone if halving
+  // does not help.
+  bool fold_guard = true;
+  Displacement displacement = Displacement::kNormal;
 
   // Edges whose two face normals differ by more than this are creases (ridges,
   // eaves, wall edges): the surface stays continuous but not smooth across them

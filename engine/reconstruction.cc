@@ -15,6 +15,7 @@
 #include "mesh/creases.h"
 #include "mesh/local_ops.h"
 #include "mesh/subdivision.h"
+#include "mesh/surface_validity.h"
 
 namespace facets {
 namespace {
@@ -163,6 +164,7 @@ void ReconstructionOptions::Check() const {
   if (levels < 1 || levels > 10) fail("levels must lie in 1..10");
   if (!(facet_pixels > 0.5)) fail("facet_pixels must be > 0.5");
   if (lifting_steps < 0) fail("lifting_steps must be >= 0");
+  if (wall_passes < 0 || wall_passes > 10) fail("wall_passes must lie in 0..10");
   if (lifting_steps > 0 && !(lifting_range > 0)) fail("lifting_range must be > 0");
   if (roi && !(roi->max.array() > roi->min.array()).head<2>().all()) {
     fail("region of interest is empty");
@@ -207,6 +209,13 @@ std::string ReconstructionReport::Json() const {
     l["vertices"] = level.vertices;
     l["faces"] = level.faces;
     l["seconds"] = level.seconds;
+    l["folded_faces"] = level.folded_faces;
+    l["self_intersections"] = level.self_intersections;
+    l["fold_limited"] = level.fold_limited;
+    for (const WallPass& pass : level.wall_passes) {
+      l["wall_passes"].push_back({{"splits", pass.splits}, {"flips", pass.flips},
+                                  {"faces", pass.faces}, {"sigma0", pass.sigma0}});
+    }
     auto window_json = [](const WindowReport& w) {
       json window = {{"converged", w.converged},
                      {"stalled", w.stalled},
@@ -236,6 +245,7 @@ std::string ReconstructionReport::Json() const {
              {"robust_scale", it.robust_scale},
              {"rejected", it.rejected},
              {"max_dn", {it.max_dn_interior, it.max_dn_border, it.max_dn_corner}},
+             {"fold_limited", it.fold_limited},
              {"seconds", {{"cast", it.seconds_cast},
                           {"linearise", it.seconds_linearise},
                           {"solve", it.seconds_solve},
@@ -412,6 +422,34 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
         " faces, ground pixel " + std::to_string(level_report.ground_pixel) + " m");
     LevelAdjustment adjusted = AdjustLevelInWindows(&mesh, window_images(level), level_options(level),
                                                     options.windows, level == 0, options.progress);
+    // Walls that stood up during this adjustment stretched their triangles: split them
+    // now and adjust again, so a wall carries vertices at the density of roof and
+    // ground within the level, not only one level later (issue 7).
+    for (int pass = 0; pass < options.wall_passes; ++pass) {
+      QualityOptions quality;
+      quality.target_edge_length = edge_length(level);
+      quality.max_rounds = 1;
+      if (CountLongEdges(mesh, quality) == 0) break;
+      const QualityReport split = QualityPass(&mesh, quality);
+      UpdateVertexNormals(&mesh);
+      say("  level " + std::to_string(level) + " wall pass " + std::to_string(pass + 1) + ": " +
+          std::to_string(split.splits) + " splits, " + std::to_string(split.flips) + " flips, " +
+          std::to_string(mesh.n_faces()) + " faces; sigma0 before " + std::to_string(adjusted.summary.sigma0));
+      adjusted = AdjustLevelInWindows(&mesh, window_images(level), level_options(level), options.windows,
+                                      level == 0, options.progress);
+      level_report.wall_passes.push_back(
+          {split.splits, split.flips, static_cast<int>(mesh.n_faces()), adjusted.summary.sigma0});
+    }
+    level_report.vertices = static_cast<int>(mesh.n_vertices());
+    level_report.faces = static_cast<int>(mesh.n_faces());
+    level_report.folded_faces = CountFoldedFaces(mesh);
+    level_report.self_intersections = CountSelfIntersections(mesh);
+    for (const WindowReport& w : adjusted.windows) {
+      for (const IterationReport& it : w.iterations) level_report.fold_limited += it.fold_limited;
+    }
+    say("  level " + std::to_string(level) + ": " + std::to_string(level_report.folded_faces) +
+        " folded faces, " + std::to_string(level_report.self_intersections) + " self-intersecting pairs, " +
+        std::to_string(level_report.fold_limited) + " vertex steps limited by the fold guard");
     level_report.window = std::move(adjusted.summary);
     level_report.windows = std::move(adjusted.windows);
     level_report.window_core_faces = std::move(adjusted.window_core_faces);

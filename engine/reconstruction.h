@@ -70,6 +70,12 @@ struct ReconstructionOptions {
   // image_cache_mb; empty: every level image in memory.
   std::optional<std::string> image_cache_dir;
   double image_cache_mb = 256.0;
+  // Wall passes (issue 7): walls standing up inside a level stretch its triangles, so
+  // after a level's adjustment the quality pass (splits beyond 1.5x the target edge,
+  // tangent Delaunay flips) runs again and, when it split edges, the level is adjusted
+  // again; at most this many extra adjustments per level. 0 = quality pass between
+  // levels only.
+  int wall_passes = 1;
   // Called with one line of progress at a time (stage, level, iteration, sigma0).
   std::function<void(const std::string&)> progress;
 
@@ -91,6 +97,14 @@ struct LiftingTrial {
 // 1e299 (no image saw them) are skipped.
 double ChooseLiftedHeight(const std::vector<LiftingTrial>& trials);
 
+// One extra adjustment of a level after the quality pass split stretched edges.
+struct WallPass {
+  int splits = 0;
+  int flips = 0;
+  int faces = 0;        // after the splits
+  double sigma0 = 0.0;  // of the adjustment that followed
+};
+
 struct LevelReport {
   int level = 0;               // 0 = finest
   double ground_pixel = 0.0;   // mean ground pixel size of the level's images (m)
@@ -101,6 +115,12 @@ struct LevelReport {
   std::vector<WindowReport> windows;   // one per window (per-vertex vectors: owned vertices)
   std::vector<int> window_core_faces;
   int window_groups = 0;
+  std::vector<WallPass> wall_passes;  // ReconstructionOptions::wall_passes
+  // Validity of the level's final TIN (mesh/surface_validity.h) and the vertex steps
+  // the fold guard limited (summed over windows and iterations, last adjustment).
+  int folded_faces = 0;
+  int self_intersections = 0;
+  int fold_limited = 0;
   double seconds = 0.0;
 };
 

@@ -13,6 +13,7 @@
 
 #include "engine/observation.h"
 #include "mesh/creases.h"
+#include "mesh/surface_validity.h"
 #include "visibility/image_selection.h"
 #include "visibility/surface_scene.h"
 
@@ -361,7 +362,7 @@ double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservati
         for (int j = 0; j < 3; ++j) {
           facet.corners[j] = tess_.points[tri[j]];
           facet.corner_face_barycentric[j] = corners[j];
-          facet.vertex_normals[j] = ToEigen(mesh_->normal(mesh_->vertex_handle(face_vertices_[f][j])));
+          facet.vertex_normals[j] = Direction(face_vertices_[f][j]);
         }
         ray.direction = rays.Direction(obs.x, obs.y);
         std::array<int, 6> local;
@@ -486,11 +487,10 @@ double WindowAdjustment::AccumulateCurvature(Eigen::VectorXd* rhs, long long* co
     for (int j : ring) h += (ToEigen(mesh_->point(mesh_->vertex_handle(j))) - x).norm();
     h /= ring.size();
     std::vector<std::pair<int, double>> terms;
-    if (vertex_unknown_[v] >= 0) terms.emplace_back(vertex_unknown_[v], -1.0 / h);
+    if (vertex_unknown_[v] >= 0) terms.emplace_back(vertex_unknown_[v], -n.dot(Direction(static_cast<int>(v))) / h);
     for (int j : ring) {
       if (vertex_unknown_[j] < 0) continue;
-      const Eigen::Vector3d nj = ToEigen(mesh_->normal(mesh_->vertex_handle(j)));
-      terms.emplace_back(vertex_unknown_[j], n.dot(nj) / (ring.size() * h));
+      terms.emplace_back(vertex_unknown_[j], n.dot(Direction(j)) / (ring.size() * h));
     }
     if (terms.empty()) continue;
     const double target =
@@ -510,6 +510,11 @@ void WindowAdjustment::SetOccluders(std::vector<Eigen::Vector3d> points,
                                     std::vector<Eigen::Vector3i> triangles) {
   occluder_points_ = std::move(points);
   occluder_triangles_ = std::move(triangles);
+}
+
+Eigen::Vector3d WindowAdjustment::Direction(int v) const {
+  if (options_.displacement == Displacement::kVertical) return Eigen::Vector3d::UnitZ();
+  return ToEigen(mesh_->normal(mesh_->vertex_handle(v)));
 }
 
 WindowReport WindowAdjustment::Run() {
@@ -599,11 +604,15 @@ WindowReport WindowAdjustment::Run() {
       if (largest > options_.max_step) scale = options_.max_step / largest;
     }
     double max_dn[3] = {0.0, 0.0, 0.0};
+    std::vector<Eigen::Vector3d> before;  // for the fold guard
+    if (options_.fold_guard) {
+      for (auto vh : mesh_->vertices()) before.push_back(ToEigen(mesh_->point(vh)));
+    }
     for (int v = 0; v < num_vertices; ++v) {
       if (vertex_unknown_[v] < 0) continue;
       const double dn = scale * solution[vertex_unknown_[v]];
       auto vh = mesh_->vertex_handle(v);
-      mesh_->set_point(vh, mesh_->point(vh) + dn * mesh_->normal(vh));
+      mesh_->set_point(vh, mesh_->point(vh) + ToOpenMesh(dn * Direction(v)));
       if (judged_.empty() || judged_[v]) {
         max_dn[vertex_class_[v]] = std::max(max_dn[vertex_class_[v]], std::abs(dn));
       }
@@ -615,6 +624,7 @@ WindowReport WindowAdjustment::Run() {
         if (rad_unknown_[k][c][1] >= 0) radiometry_[k][c][1] += solution[rad_unknown_[k][c][1]];
       }
     }
+    if (options_.fold_guard) it.fold_limited = LimitFoldingSteps(mesh_, before);
     UpdateVertexNormals(mesh_);
     if (options_.regularisation == Regularisation::kAdaptive) curvature_target_ = CurrentCurvatures();
     UpdateTessellationPoints(BuildPatches(*mesh_, ComputeCornerNormals(*mesh_, crease_edges_)), &tess_);

@@ -58,6 +58,7 @@ struct IterationReport {
   double max_dn_interior = 0.0;  // object units
   double max_dn_border = 0.0;
   double max_dn_corner = 0.0;
+  int fold_limited = 0;  // vertices whose step the fold guard limited
   double seconds_cast = 0.0;
   double seconds_linearise = 0.0;  // linearisation + accumulation into CSR
   double seconds_solve = 0.0;
@@ -140,6 +141,8 @@ class WindowAdjustment {
                     Eigen::VectorXd* rhs, long long* count);
   double AccumulateCurvature(Eigen::VectorXd* rhs, long long* count);
   std::vector<double> CurrentCurvatures() const;
+  // Unit direction vertex v moves in (AdjustmentOptions::displacement).
+  Eigen::Vector3d Direction(int v) const;
 
   TinMesh* mesh_;
   std::vector<LevelImage> images_;

@@ -276,6 +276,14 @@ QualityReport QualityPass(TinMesh* mesh, const QualityOptions& options) {
   return report;
 }
 
+int CountLongEdges(const TinMesh& mesh, const QualityOptions& options) {
+  options.Check();
+  const double limit = options.split_factor * options.target_edge_length;
+  int count = 0;
+  for (auto e : mesh.edges()) count += mesh.calc_edge_length(e) > limit ? 1 : 0;
+  return count;
+}
+
 AngleStats FaceAngleStats(const TinMesh& mesh) {
   AngleStats stats;
   stats.min_angle = std::numbers::pi;

@@ -72,6 +72,8 @@ struct QualityReport {
 // midpoints, then flips to restore tangent-plane Delaunay. Vertex normals of old
 // vertices are kept; face normals updated.
 QualityReport QualityPass(TinMesh* mesh, const QualityOptions& options);
+// Edges QualityPass would split (longer than split_factor x target_edge_length).
+int CountLongEdges(const TinMesh& mesh, const QualityOptions& options);
 
 // Mean over faces of the smallest angle (radians), and the smallest over all faces.
 struct AngleStats {

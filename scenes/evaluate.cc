@@ -241,6 +241,23 @@ TruthScene ReadTruthScene(const std::string& dir) {
       }
       truth.roi = roi;
     }
+    if (j.contains("shapes") && j["shapes"].is_array()) {
+      for (const auto& shape : j["shapes"]) {
+        if (shape.value("type", "") != "building") continue;
+        TruthBuilding b;
+        const auto c = shape.value("centre", std::vector<double>{0, 0, 0});
+        if (c.size() != 3) throw std::runtime_error(json_path + ": building centre needs 3 values");
+        b.centre = Eigen::Vector3d(c[0], c[1], c[2]);
+        b.azimuth_deg = shape.value("azimuth_deg", 0.0);
+        b.length = shape.value("length", 10.0);
+        b.width = shape.value("width", 10.0);
+        b.height = shape.value("height", 3.0);
+        const auto lean = shape.value("wall_lean_deg", std::vector<double>{0, 0, 0, 0});
+        if (lean.size() != 4) throw std::runtime_error(json_path + ": wall_lean_deg needs 4 values");
+        b.wall_lean_deg = Eigen::Vector4d(lean[0], lean[1], lean[2], lean[3]);
+        truth.buildings.push_back(b);
+      }
+    }
     if (j.contains("labels")) {
       for (const auto& [key, value] : j["labels"].items()) {
         int label = 0;
@@ -347,6 +364,30 @@ EvaluationReport Evaluate(const TruthScene& truth, const MeshData& reconstructio
                         }
                       });
     report.num_reconstruction_samples = samples.size();
+    if (!reconstruction.sigma.empty() && reconstruction.views.size() == reconstruction.vertices.size()) {
+      // Sigma by view count per region: is a wall seen by fewer images less certain?
+      std::map<int, std::array<std::vector<double>, 3>> by_label;
+      for (size_t v = 0; v < reconstruction.vertices.size(); ++v) {
+        if (!in_roi(reconstruction.vertices[v])) continue;
+        const int label = LabelOf(truth.mesh, to_truth.Closest(reconstruction.vertices[v]).second);
+        const int views = reconstruction.views[v];
+        if (!(reconstruction.sigma[v] > 0)) continue;  // fixed or not estimated
+        by_label[label][views < 2 ? 0 : views == 2 ? 1 : 2].push_back(reconstruction.sigma[v]);
+      }
+      for (auto& [label, groups] : by_label) {
+        SigmaByViews row;
+        row.label = label;
+        const auto name = truth.labels.find(label);
+        row.name = name != truth.labels.end() ? name->second : DefaultLabelName(label);
+        for (int g = 0; g < 3; ++g) {
+          const DistanceStats st = ComputeStats(groups[g]);
+          row.count[g] = st.count;
+          row.median[g] = st.median;
+          row.mean[g] = st.mean;
+        }
+        report.sigma_by_views.push_back(row);
+      }
+    }
     for (size_t i = 0; i < samples.size(); ++i) accuracy[label[i]].push_back(distance[i]);
     accuracy_all = distance;
   }
@@ -468,11 +509,91 @@ EvaluationReport Evaluate(const TruthScene& truth, const MeshData& reconstructio
   all.multi_view = ComputeCompleteness(multi_all, thresholds_m);
   all.few_views = ComputeCompleteness(few_all, thresholds_m);
   report.regions.push_back(all);
+  report.leaning_walls =
+      EvaluateLeaningWalls(truth, reconstruction, report.roi, options.wall_band_gsd * gsd);
   if (options.height_grid_gsd > 0.0 && report.roi) {
     report.heights = EvaluateHeights(truth.mesh, reconstruction, *report.roi,
                                      options.height_grid_gsd * gsd, options.height_border_gsd * gsd);
   }
   return report;
+}
+
+std::vector<WallLean> EvaluateLeaningWalls(const TruthScene& truth, const MeshData& reconstruction,
+                                           const std::optional<RegionOfInterest>& roi, double band) {
+  std::vector<WallLean> result;
+  const double deg = M_PI / 180.0;
+  const Eigen::Vector2d sides[4] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
+  const auto& tv = truth.mesh.vertices;
+  for (size_t bi = 0; bi < truth.buildings.size(); ++bi) {
+    const TruthBuilding& b = truth.buildings[bi];
+    const double ca = std::cos(b.azimuth_deg * deg), sa = std::sin(b.azimuth_deg * deg);
+    for (int w = 0; w < 4; ++w) {
+      if (b.wall_lean_deg[w] == 0.0) continue;
+      const Eigen::Vector3d out(ca * sides[w].x() - sa * sides[w].y(), sa * sides[w].x() + ca * sides[w].y(), 0);
+      const double lean = b.wall_lean_deg[w] * deg;
+      // Outward lean: the top moves out, so the outward normal looks down.
+      const Eigen::Vector3d expected = std::cos(lean) * out - std::sin(lean) * Eigen::Vector3d::UnitZ();
+      const double reach = 0.75 * std::hypot(b.length, b.width) + b.height;
+      std::vector<Eigen::Vector3d> wall_points;
+      for (size_t f = 0; f < truth.mesh.faces.size(); ++f) {
+        if (LabelOf(truth.mesh, static_cast<int>(f)) != 2) continue;
+        const auto& t = truth.mesh.faces[f];
+        const Eigen::Vector3d n = (tv[t[1]] - tv[t[0]]).cross(tv[t[2]] - tv[t[0]]).normalized();
+        const Eigen::Vector3d centroid = (tv[t[0]] + tv[t[1]] + tv[t[2]]) / 3.0;
+        if (n.dot(expected) < std::cos(2 * deg) || (centroid - b.centre).head<2>().norm() > reach) continue;
+        for (int k = 0; k < 3; ++k) wall_points.push_back(tv[t[k]]);
+      }
+      if (wall_points.size() < 3) continue;
+      WallLean lean_row;
+      lean_row.building = static_cast<int>(bi);
+      lean_row.wall = w;
+      lean_row.true_lean_deg = b.wall_lean_deg[w];
+      auto signed_lean = [&](const PlaneFit& fit) {
+        const Eigen::Vector3d n = fit.normal.dot(out) < 0 ? Eigen::Vector3d(-fit.normal) : fit.normal;
+        return std::asin(std::clamp(-n.z(), -1.0, 1.0)) / deg;
+      };
+      const PlaneFit truth_fit = FitPlane(wall_points);
+      lean_row.truth_fit_lean_deg = signed_lean(truth_fit);
+      const Eigen::Vector3d along = Eigen::Vector3d::UnitZ().cross(out);
+      double s_min = 1e300, s_max = -1e300, eave = -1e300;
+      for (const auto& p : wall_points) {
+        s_min = std::min(s_min, p.dot(along));
+        s_max = std::max(s_max, p.dot(along));
+        eave = std::max(eave, p.z());
+      }
+      const double foot = eave - b.height;
+      std::vector<Eigen::Vector3d> near;
+      for (const auto& p : reconstruction.vertices) {
+        if (roi && !roi->Contains(p)) continue;
+        const double s = p.dot(along);
+        if (s < s_min + 1.0 || s > s_max - 1.0) continue;
+        if (p.z() < foot + 0.15 * b.height || p.z() > eave - 0.15 * b.height) continue;
+        if (std::abs((p - truth_fit.centroid).dot(truth_fit.normal)) > band) continue;
+        near.push_back(p);
+      }
+      lean_row.lean_deg = std::numeric_limits<double>::quiet_NaN();
+      if (near.size() >= 10) {
+        try {
+          PlaneFit fit = FitPlane(near);
+          // One robust round: points beyond 2.5 rms (a roof or ground patch in the band)
+          // are left out and the plane fitted again.
+          std::vector<Eigen::Vector3d> kept;
+          for (const auto& p : near) {
+            if (std::abs((p - fit.centroid).dot(fit.normal)) <= 2.5 * fit.rms) kept.push_back(p);
+          }
+          if (kept.size() >= 10) fit = FitPlane(kept);
+          lean_row.lean_deg = signed_lean(fit);
+          lean_row.vertices = static_cast<int>(kept.size() >= 10 ? kept.size() : near.size());
+          lean_row.rms = fit.rms;
+        } catch (const std::invalid_argument&) {
+          // Collinear vertices: no plane, lean stays NaN.
+        }
+      }
+      if (roi && near.empty() && !roi->Contains(truth_fit.centroid)) continue;  // wall outside the region
+      result.push_back(lean_row);
+    }
+  }
+  return result;
 }
 
 HeightErrors EvaluateHeights(const MeshData& truth, const MeshData& reconstruction,
@@ -603,6 +724,23 @@ std::string EvaluationReport::Table() const {
                   heights.min, heights.max);
     out << line;
   }
+  for (const WallLean& w : leaning_walls) {
+    std::snprintf(line, sizeof(line),
+                  "\nLeaning wall (building %d, wall %d): true lean %.2f deg (truth mesh fit %.2f), "
+                  "reconstructed %.2f deg from %d vertices (plane rms %.3f m)\n",
+                  w.building, w.wall, w.true_lean_deg, w.truth_fit_lean_deg, w.lean_deg, w.vertices, w.rms);
+    out << line;
+  }
+  if (!sigma_by_views.empty()) {
+    out << "\nReported sigma of the reconstruction's vertices by images seeing them (median / mean, m)\n";
+    for (const SigmaByViews& r : sigma_by_views) {
+      std::snprintf(line, sizeof(line),
+                    "  %-10s <2 views: %6zu  %.4f / %.4f   2 views: %6zu  %.4f / %.4f   >=3 views: %6zu  %.4f / %.4f\n",
+                    r.name.c_str(), r.count[0], r.median[0], r.mean[0], r.count[1], r.median[1], r.mean[1],
+                    r.count[2], r.median[2], r.mean[2]);
+      out << line;
+    }
+  }
   out << "  by view count\n";
   for (const RegionScore& r : regions) {
     if (r.label == -1) continue;
@@ -644,6 +782,21 @@ std::string EvaluationReport::Json(bool with_samples) const {
                         {"rms", heights.rms},     {"mean", heights.mean},
                         {"min", heights.min},     {"max", heights.max},
                         {"spacing", heights.spacing}};
+  for (const SigmaByViews& r : sigma_by_views) {
+    nlohmann::json row = {{"label", r.label}, {"name", r.name}};
+    const char* keys[3] = {"views_lt2", "views_2", "views_ge3"};
+    for (int g = 0; g < 3; ++g) {
+      row[keys[g]] = {{"count", r.count[g]}, {"median", r.median[g]}, {"mean", r.mean[g]}};
+    }
+    j["sigma_by_views"].push_back(row);
+  }
+  for (const WallLean& w : leaning_walls) {
+    j["leaning_walls"].push_back(
+        {{"building", w.building}, {"wall", w.wall}, {"true_lean_deg", w.true_lean_deg},
+         {"truth_fit_lean_deg", w.truth_fit_lean_deg},
+         {"lean_deg", std::isfinite(w.lean_deg) ? nlohmann::json(w.lean_deg) : nlohmann::json(nullptr)},
+         {"vertices", w.vertices}, {"rms", w.rms}});
+  }
   if (with_samples) {
     nlohmann::json s = nlohmann::json::array();
     for (const TruthSample& t : truth_samples) {

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <map>
 #include <optional>
 #include <string>
@@ -29,12 +30,21 @@ namespace facets {
 // 2 wall, 3 object), DIR/truth.json ("ground_pixel_size" in m, optional
 // "region_of_interest" {"min":[x,y,z],"max":[x,y,z]}, optional "labels"
 // {"0":"ground",...}) and DIR/sparse/ (COLMAP text model of the cameras).
+// A building of the truth scene (truth.json "shapes", type "building"): enough to find
+// its walls again. Walls: 0 +u, 1 +v, 2 -u, 3 -v in the frame rotated by azimuth.
+struct TruthBuilding {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  double azimuth_deg = 0, length = 0, width = 0, height = 0;
+  Eigen::Vector4d wall_lean_deg = Eigen::Vector4d::Zero();  // outward, per wall
+};
+
 struct TruthScene {
   MeshData mesh;                       // face_labels empty = every face label 0
   double ground_pixel_size = 0.0;      // GSD, m
   std::optional<RegionOfInterest> roi;
   std::map<int, std::string> labels;   // region label -> name
   ImageBlock block;                    // the cameras that photographed the truth
+  std::vector<TruthBuilding> buildings;  // from truth.json when it lists shapes
 };
 
 // Throws std::runtime_error naming the file and what is wrong.
@@ -70,6 +80,10 @@ struct EvaluationOptions {
   // the window border). 0 = off.
   double height_grid_gsd = 2.0;
   double height_border_gsd = 8.0;
+  // Leaning walls: reconstructed vertices within this distance (GSD) of the truth
+  // wall's plane belong to it (a vertical reconstruction of a 12 m wall leaning 9
+  // degrees stays within 8 GSD of it).
+  double wall_band_gsd = 8.0;
 
   // Throws std::invalid_argument naming the offending option.
   void Check() const;
@@ -110,6 +124,30 @@ struct HeightErrors {
   double spacing = 0;  // m
 };
 
+// The lean of a leaning truth wall as reconstructed (issue 7): a plane fitted to the
+// reconstruction's vertices near the truth wall (within wall_band_gsd of its plane,
+// 1 m in from its side edges, between 15 % and 85 % of the eave height).
+struct WallLean {
+  int building = 0;  // index into TruthScene::buildings
+  int wall = 0;      // 0 +u, 1 +v, 2 -u, 3 -v
+  double true_lean_deg = 0;       // from the scene description
+  double truth_fit_lean_deg = 0;  // plane fitted to the truth wall's vertices (check)
+  double lean_deg = 0;            // plane fitted to the reconstructed vertices; NaN: too few
+  int vertices = 0;               // reconstructed vertices used
+  double rms = 0;                 // of the fit, m
+};
+
+// Reported standard deviations of the reconstruction's vertices (when the mesh carries
+// per-vertex sigma and views, as tin.ply and surface.ply do), per truth region of the
+// closest truth face and by the number of images that saw the vertex: < 2, 2, >= 3.
+struct SigmaByViews {
+  int label = 0;
+  std::string name;
+  std::array<size_t, 3> count = {0, 0, 0};
+  std::array<double, 3> median = {0, 0, 0};  // m
+  std::array<double, 3> mean = {0, 0, 0};    // m
+};
+
 struct EvaluationReport {
   double ground_pixel_size = 0.0;  // m
   HeightErrors heights;
@@ -124,6 +162,8 @@ struct EvaluationReport {
   std::string truth_name, mesh_name;      // for the report header
   std::vector<RegionScore> regions;       // sorted by label, then the "all" row
   std::vector<TruthSample> truth_samples;
+  std::vector<WallLean> leaning_walls;  // every truth wall with a nonzero lean
+  std::vector<SigmaByViews> sigma_by_views;  // empty when the mesh has no sigma/views
 
   // The region's row or nullptr (label -1 = all regions).
   const RegionScore* Region(int label) const;
@@ -150,6 +190,10 @@ EvaluationReport EvaluateFiles(const std::string& truth_dir, const std::string& 
 std::vector<Eigen::Vector3d> SampleSurface(const MeshData& mesh, double spacing,
                                            std::vector<int>* face_of = nullptr,
                                            const std::vector<bool>* face_mask = nullptr);
+
+// The leaning walls of the truth's buildings as reconstructed (see WallLean).
+std::vector<WallLean> EvaluateLeaningWalls(const TruthScene& truth, const MeshData& reconstruction,
+                                           const std::optional<RegionOfInterest>& roi, double band);
 
 // Least-squares plane through points (smallest eigenvector of the scatter matrix).
 struct PlaneFit {

@@ -1,0 +1,128 @@
+#include "mesh/surface_validity.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <algorithm>
+#include <iterator>
+#include <set>
+#include <utility>
+
+namespace facets {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using CgalMesh = CGAL::Surface_mesh<Kernel::Point_3>;
+
+// Unit face normals from positions indexed by vertex (zero for degenerate faces).
+std::vector<Eigen::Vector3d> FaceNormals(const TinMesh& mesh, const std::vector<Eigen::Vector3d>& points) {
+  std::vector<Eigen::Vector3d> normals(mesh.n_faces(), Eigen::Vector3d::Zero());
+  for (auto f : mesh.faces()) {
+    Eigen::Vector3d x[3];
+    int k = 0;
+    for (auto v : mesh.fv_range(f)) x[k++] = points[v.idx()];
+    const Eigen::Vector3d n = (x[1] - x[0]).cross(x[2] - x[0]);
+    const double length = n.norm();
+    if (length > 0.0) normals[f.idx()] = n / length;
+  }
+  return normals;
+}
+
+std::vector<Eigen::Vector3d> Points(const TinMesh& mesh) {
+  std::vector<Eigen::Vector3d> points(mesh.n_vertices());
+  for (auto v : mesh.vertices()) points[v.idx()] = ToEigen(mesh.point(v));
+  return points;
+}
+
+std::set<std::pair<int, int>> SelfIntersectingPairs(const TinMesh& mesh,
+                                                    const std::vector<Eigen::Vector3d>& points) {
+  CgalMesh cgal;
+  for (auto v : mesh.vertices()) {
+    const Eigen::Vector3d& p = points[v.idx()];
+    cgal.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z()));  // index = v.idx()
+  }
+  // CGAL face index = TIN face index: faces added in order.
+  for (auto f : mesh.faces()) {
+    CgalMesh::Vertex_index t[3];
+    int k = 0;
+    for (auto v : mesh.fv_range(f)) t[k++] = CgalMesh::Vertex_index(static_cast<CgalMesh::size_type>(v.idx()));
+    cgal.add_face(t[0], t[1], t[2]);
+  }
+  std::vector<std::pair<CgalMesh::Face_index, CgalMesh::Face_index>> pairs;
+  CGAL::Polygon_mesh_processing::self_intersections(cgal, std::back_inserter(pairs));
+  std::set<std::pair<int, int>> result;
+  for (const auto& [a, b] : pairs) {
+    const int i = static_cast<int>(a), j = static_cast<int>(b);
+    result.emplace(std::min(i, j), std::max(i, j));
+  }
+  return result;
+}
+
+bool Folded(const TinMesh& mesh, const std::vector<Eigen::Vector3d>& normals, TinMesh::FaceHandle f) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (auto g : mesh.ff_range(f)) mean += normals[g.idx()];
+  return mean.squaredNorm() > 0.0 && normals[f.idx()].dot(mean) < 0.0;
+}
+
+}  // namespace
+
+std::vector<bool> FoldedFaces(const TinMesh& mesh) {
+  const std::vector<Eigen::Vector3d> normals = FaceNormals(mesh, Points(mesh));
+  std::vector<bool> folded(mesh.n_faces(), false);
+  for (auto f : mesh.faces()) folded[f.idx()] = Folded(mesh, normals, f);
+  return folded;
+}
+
+int CountFoldedFaces(const TinMesh& mesh) {
+  int count = 0;
+  for (bool f : FoldedFaces(mesh)) count += f ? 1 : 0;
+  return count;
+}
+
+int CountSelfIntersections(const TinMesh& mesh) {
+  return static_cast<int>(SelfIntersectingPairs(mesh, Points(mesh)).size());
+}
+
+int LimitFoldingSteps(TinMesh* mesh, const std::vector<Eigen::Vector3d>& before, int halvings) {
+  const std::vector<Eigen::Vector3d> normals_before = FaceNormals(*mesh, before);
+  std::vector<bool> folded_before(mesh->n_faces(), false);
+  for (auto f : mesh->faces()) folded_before[f.idx()] = Folded(*mesh, normals_before, f);
+  const std::set<std::pair<int, int>> crossing_before = SelfIntersectingPairs(*mesh, before);
+  std::vector<bool> limited(mesh->n_vertices(), false);
+  for (int round = 0; round <= halvings; ++round) {
+    const std::vector<Eigen::Vector3d> points = Points(*mesh);
+    const std::vector<Eigen::Vector3d> normals = FaceNormals(*mesh, points);
+    std::vector<bool> shrink(mesh->n_vertices(), false);
+    bool any = false;
+    // Triangles that now cross where they did not before.
+    for (const auto& pair : SelfIntersectingPairs(*mesh, points)) {
+      if (crossing_before.count(pair)) continue;
+      any = true;
+      for (int f : {pair.first, pair.second}) {
+        for (auto v : mesh->fv_range(mesh->face_handle(f))) shrink[v.idx()] = true;
+      }
+    }
+    for (auto f : mesh->faces()) {
+      if (folded_before[f.idx()]) continue;  // an old fold may unfold; do not freeze it
+      const bool bad = normals[f.idx()].dot(normals_before[f.idx()]) < 0.0 || Folded(*mesh, normals, f);
+      if (!bad) continue;
+      any = true;
+      for (auto v : mesh->fv_range(f)) shrink[v.idx()] = true;
+    }
+    if (!any) break;
+    for (auto v : mesh->vertices()) {
+      if (!shrink[v.idx()]) continue;
+      limited[v.idx()] = true;
+      const Eigen::Vector3d p = ToEigen(mesh->point(v));
+      // The last round undoes the step: the surface before it was valid here.
+      const Eigen::Vector3d q = round == halvings ? before[v.idx()] : before[v.idx()] + 0.5 * (p - before[v.idx()]);
+      mesh->set_point(v, ToOpenMesh(q));
+    }
+  }
+  int count = 0;
+  for (bool l : limited) count += l ? 1 : 0;
+  return count;
+}
+
+}  // namespace facets

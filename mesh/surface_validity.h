@@ -1,0 +1,30 @@
+// Validity of a TIN as it turns from 2.5D into 3D (issue 7): folded triangles, self-
+// intersections, and a guard that limits vertex steps which would fold the surface.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "mesh/tin.h"
+
+namespace facets {
+
+// A face is folded when its normal points against the mean of its edge neighbours'
+// normals (dot < 0): the surface turned back on itself there. Normals are computed
+// from the points, not taken from the mesh.
+std::vector<bool> FoldedFaces(const TinMesh& mesh);
+int CountFoldedFaces(const TinMesh& mesh);
+
+// Pairs of triangles that intersect other than in shared vertices or edges (CGAL
+// Polygon_mesh_processing::self_intersections on the TIN's chord triangles).
+int CountSelfIntersections(const TinMesh& mesh);
+
+// Fold guard for one adjustment step: `before` holds the points before the step
+// (one per vertex). A face that was not folded before and now is folded or has its
+// normal reversed against its own normal before the step, and a pair of faces that
+// intersect now but did not before, mark their vertices; their
+// steps are halved, up to `halvings` times, and undone when the face is still bad.
+// Vertex normals are not updated (the caller does). Returns the vertices limited.
+int LimitFoldingSteps(TinMesh* mesh, const std::vector<Eigen::Vector3d>& before, int halvings = 4);
+
+}  // namespace facets
