@@ -54,6 +54,7 @@ struct ReconstructArgs {
   int wall_passes = ReconstructionOptions().wall_passes;
   std::string displacement = "normal";
   bool no_fold_guard = false;
+  bool no_relax_unseen = false;
   bool no_occluders = false;
   bool tiled_images = false;
   double image_memory_mb = 1024.0;
@@ -127,6 +128,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.wall_passes = args.wall_passes;
   options.adjustment.displacement = DisplacementFromName(args.displacement);
   options.adjustment.fold_guard = !args.no_fold_guard;
+  options.relax_unseen = !args.no_relax_unseen;
   options.windows.occluders = !args.no_occluders;
   // Level images in memory while they fit the budget, else tiled on disk and read per
   // window (pyramid: 4/3 of the originals; float per channel).
@@ -237,6 +239,8 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--displacement", args->displacement,
                   "normal (3D: walls stand up) | vertical (2.5D, for comparison)")
       ->capture_default_str();
+  sub->add_flag("--no-relax-unseen", args->no_relax_unseen,
+                "leave vertices no image saw where the adjustment left them");
   sub->add_flag("--no-fold-guard", args->no_fold_guard, "do not limit vertex steps that would fold the surface");
   sub->add_flag("--no-occluders", args->no_occluders, "windows do not see the surface around them");
   sub->add_flag("--tiled-images", args->tiled_images, "level images on disk, read per window (also when over --image-memory)");

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "engine/hidden_vertices.h"
 #include "engine/start_fitted_plane.h"
 #include "mesh/creases.h"
 #include "mesh/local_ops.h"
@@ -212,6 +213,7 @@ std::string ReconstructionReport::Json() const {
     l["folded_faces"] = level.folded_faces;
     l["self_intersections"] = level.self_intersections;
     l["fold_limited"] = level.fold_limited;
+    l["relaxed_unseen"] = level.relaxed;
     for (const WallPass& pass : level.wall_passes) {
       l["wall_passes"].push_back({{"splits", pass.splits}, {"flips", pass.flips},
                                   {"faces", pass.faces}, {"sigma0", pass.sigma0}});
@@ -422,6 +424,15 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
         " faces, ground pixel " + std::to_string(level_report.ground_pixel) + " m");
     LevelAdjustment adjusted = AdjustLevelInWindows(&mesh, window_images(level), level_options(level),
                                                     options.windows, level == 0, options.progress);
+    // Vertices no image saw (a sheet folded under a roof that rose) fall back to the
+    // membrane spanned by the seen surface around them (mesh/local_ops.h).
+    auto relax_unseen = [&]() {
+      if (!options.relax_unseen) return;
+      // A vertex counts as seen when some image sees it within a quarter of an edge.
+      level_report.relaxed +=
+          RelaxUnseenVertices(&mesh, VisibleViews(mesh, block, 0.25 * edge_length(level)));
+      UpdateVertexNormals(&mesh);
+    };
     // Walls that stood up during this adjustment stretched their triangles: split them
     // now and adjust again, so a wall carries vertices at the density of roof and
     // ground within the level, not only one level later (issue 7).
@@ -430,6 +441,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       quality.target_edge_length = edge_length(level);
       quality.max_rounds = 1;
       if (CountLongEdges(mesh, quality) == 0) break;
+      relax_unseen();
       const QualityReport split = QualityPass(&mesh, quality);
       UpdateVertexNormals(&mesh);
       say("  level " + std::to_string(level) + " wall pass " + std::to_string(pass + 1) + ": " +
@@ -440,6 +452,8 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       level_report.wall_passes.push_back(
           {split.splits, split.flips, static_cast<int>(mesh.n_faces()), adjusted.summary.sigma0});
     }
+    // Not after the finest level's last adjustment: the products use its tessellation.
+    if (level > 0) relax_unseen();
     level_report.vertices = static_cast<int>(mesh.n_vertices());
     level_report.faces = static_cast<int>(mesh.n_faces());
     level_report.folded_faces = CountFoldedFaces(mesh);
@@ -449,7 +463,8 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     }
     say("  level " + std::to_string(level) + ": " + std::to_string(level_report.folded_faces) +
         " folded faces, " + std::to_string(level_report.self_intersections) + " self-intersecting pairs, " +
-        std::to_string(level_report.fold_limited) + " vertex steps limited by the fold guard");
+        std::to_string(level_report.fold_limited) + " vertex steps limited by the fold guard, " +
+        std::to_string(level_report.relaxed) + " unseen vertices relaxed");
     level_report.window = std::move(adjusted.summary);
     level_report.windows = std::move(adjusted.windows);
     level_report.window_core_faces = std::move(adjusted.window_core_faces);

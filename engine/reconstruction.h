@@ -76,6 +76,9 @@ struct ReconstructionOptions {
   // again; at most this many extra adjustments per level. 0 = quality pass between
   // levels only.
   int wall_passes = 1;
+  // After each adjustment of a level, vertices no image saw move to the membrane
+  // spanned by the seen surface around them (RelaxUnseenVertices, mesh/local_ops.h).
+  bool relax_unseen = true;
   // Called with one line of progress at a time (stage, level, iteration, sigma0).
   std::function<void(const std::string&)> progress;
 
@@ -121,6 +124,7 @@ struct LevelReport {
   int folded_faces = 0;
   int self_intersections = 0;
   int fold_limited = 0;
+  int relaxed = 0;  // unseen vertices relaxed (ReconstructionOptions::relax_unseen), summed
   double seconds = 0.0;
 };
 

@@ -284,6 +284,30 @@ int CountLongEdges(const TinMesh& mesh, const QualityOptions& options) {
   return count;
 }
 
+int RelaxUnseenVertices(TinMesh* mesh, const std::vector<int>& views, int iterations) {
+  if (views.size() != mesh->n_vertices()) {
+    throw std::invalid_argument("RelaxUnseenVertices: one view count per vertex needed");
+  }
+  std::vector<int> free;
+  for (auto v : mesh->vertices()) {
+    if (views[v.idx()] == 0 && !mesh->is_boundary(v) && mesh->valence(v) > 0) free.push_back(v.idx());
+  }
+  std::vector<Eigen::Vector3d> next(free.size());
+  for (int it = 0; it < iterations && !free.empty(); ++it) {
+    for (size_t i = 0; i < free.size(); ++i) {
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      int count = 0;
+      for (auto w : mesh->vv_range(mesh->vertex_handle(free[i]))) {
+        mean += ToEigen(mesh->point(w));
+        ++count;
+      }
+      next[i] = mean / count;
+    }
+    for (size_t i = 0; i < free.size(); ++i) mesh->set_point(mesh->vertex_handle(free[i]), ToOpenMesh(next[i]));
+  }
+  return static_cast<int>(free.size());
+}
+
 AngleStats FaceAngleStats(const TinMesh& mesh) {
   AngleStats stats;
   stats.min_angle = std::numbers::pi;

@@ -75,6 +75,14 @@ QualityReport QualityPass(TinMesh* mesh, const QualityOptions& options);
 // Edges QualityPass would split (longer than split_factor x target_edge_length).
 int CountLongEdges(const TinMesh& mesh, const QualityOptions& options);
 
+// Vertices no image saw (views[v] == 0: hidden under a roof that rose over them, or
+// behind a wall) have no observation to pull them anywhere, and at creases no curvature
+// pseudo-observation either: a sheet of them stays folded under the roof. Each such
+// vertex moves to the mean of its neighbours (Jacobi, `iterations` times) while seen
+// and boundary vertices stay: the hidden part becomes the membrane spanned by the seen
+// surface around it. Vertex normals are not updated. Returns the vertices relaxed.
+int RelaxUnseenVertices(TinMesh* mesh, const std::vector<int>& views, int iterations = 100);
+
 // Mean over faces of the smallest angle (radians), and the smallest over all faces.
 struct AngleStats {
   double min_angle = 0.0;
