@@ -12,6 +12,8 @@
 
 #include "io/colmap_io.h"
 #include "io/ply_io.h"
+#include "scenes/scene.h"
+#include "scenes/truth_mesh.h"
 
 namespace facets {
 namespace {
@@ -294,6 +296,42 @@ TEST(FitPlaneTest, RecoversKnownTilt) {
     EXPECT_LT(fit.rms, 0.004);
   }
   EXPECT_THROW(FitPlane({{0, 0, 0}, {1, 1, 1}, {2, 2, 2}}), std::invalid_argument);
+}
+
+
+// Issue 7: the block scene's tall building leans its -v wall 9 degrees outward. Points
+// sampled densely on the truth itself must give that lean back, and no other wall is
+// reported.
+TEST(LeaningWallsTest, BlockSceneTruthGivesItsOwnLean) {
+  const Scene scene = LoadScene(std::string(FACETS_SOURCE_DIR) + "/scenes/data/block.json");
+  const struct facets::TruthMesh mesh = BuildTruthMesh(scene);
+  TruthScene truth;
+  truth.mesh.vertices = mesh.vertices;
+  truth.mesh.faces = mesh.faces;
+  truth.mesh.face_labels = mesh.labels;
+  truth.ground_pixel_size = scene.ground_pixel_size;
+  for (const Shape& shape : scene.surface) {
+    if (shape.type != ShapeType::kBuilding) continue;
+    TruthBuilding b;
+    b.centre = shape.centre;
+    b.azimuth_deg = shape.azimuth_deg;
+    b.length = shape.length;
+    b.width = shape.width;
+    b.height = shape.height;
+    b.wall_lean_deg = shape.wall_lean_deg;
+    truth.buildings.push_back(b);
+  }
+  MeshData points;
+  points.vertices = SampleSurface(truth.mesh, 0.1);
+  const std::vector<WallLean> walls = EvaluateLeaningWalls(truth, points, scene.roi, 8 * scene.ground_pixel_size);
+  ASSERT_EQ(walls.size(), 1u);
+  std::cout << "leaning wall: true " << walls[0].true_lean_deg << " deg, truth fit "
+            << walls[0].truth_fit_lean_deg << ", sampled truth " << walls[0].lean_deg << " deg from "
+            << walls[0].vertices << " points, rms " << walls[0].rms << " m\n";
+  EXPECT_EQ(walls[0].wall, 3);
+  EXPECT_NEAR(walls[0].truth_fit_lean_deg, 9.0, 1e-6);
+  EXPECT_NEAR(walls[0].lean_deg, 9.0, 0.05);
+  EXPECT_GT(walls[0].vertices, 1000);
 }
 
 }  // namespace
