@@ -55,6 +55,7 @@ struct ReconstructArgs {
   std::string displacement = "normal";
   bool no_fold_guard = false;
   bool no_relax_unseen = false;
+  bool sector_regularisation = false;
   bool no_occluders = false;
   bool tiled_images = false;
   double image_memory_mb = 1024.0;
@@ -129,6 +130,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.adjustment.displacement = DisplacementFromName(args.displacement);
   options.adjustment.fold_guard = !args.no_fold_guard;
   options.relax_unseen = !args.no_relax_unseen;
+  options.adjustment.sector_regularisation = args.sector_regularisation;
   options.windows.occluders = !args.no_occluders;
   // Level images in memory while they fit the budget, else tiled on disk and read per
   // window (pyramid: 4/3 of the originals; float per channel).
@@ -239,6 +241,8 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--displacement", args->displacement,
                   "normal (3D: walls stand up) | vertical (2.5D, for comparison)")
       ->capture_default_str();
+  sub->add_flag("--sector-regularisation", args->sector_regularisation,
+                "crease vertices: curvature pseudo-observations per sector between the creases");
   sub->add_flag("--no-relax-unseen", args->no_relax_unseen,
                 "leave vertices no image saw where the adjustment left them");
   sub->add_flag("--no-fold-guard", args->no_fold_guard, "do not limit vertex steps that would fold the surface");

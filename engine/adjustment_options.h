@@ -79,6 +79,10 @@ struct AdjustmentOptions {
   // eaves, wall edges): the surface stays continuous but not smooth across them
   // (mesh/creases.h). 180 = a G1 surface everywhere.
   double crease_angle_deg = 20.0;
+  // Crease vertices get no curvature pseudo-observation across the crease; with this
+  // they get one per sector ("flat on the roof side, flat on the wall side"), so a
+  // wall whose vertices crumpled into creases is still smoothed (issue 7).
+  bool sector_regularisation = false;
 
   // Rays at |cos incidence| below this are no observation.
   double min_cos_incidence = 0.1;

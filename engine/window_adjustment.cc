@@ -13,6 +13,7 @@
 
 #include "engine/observation.h"
 #include "mesh/creases.h"
+#include "mesh/sector_rings.h"
 #include "mesh/surface_validity.h"
 #include "visibility/image_selection.h"
 #include "visibility/surface_scene.h"
@@ -472,19 +473,22 @@ std::vector<double> WindowAdjustment::CurrentCurvatures() const {
 
 double WindowAdjustment::AccumulateCurvature(Eigen::VectorXd* rhs, long long* count) {
   if (options_.regularisation == Regularisation::kNone || options_.lambda == 0.0) return 0.0;
-  const std::vector<double> current = CurrentCurvatures();
   // Pixel observations one vertex gets from one image at the design resolution:
   // 2 triangles x 16 grey facets x 2x2 pixels (see AdjustmentOptions::lambda).
   constexpr double kPixelsPerVertex = 2 * kSubTrianglesPerFace * 4;
   const double weight = options_.lambda * kPixelsPerVertex;
   double lpl = 0.0;
-  for (size_t v = 0; v < vertex_ring_.size(); ++v) {
-    const auto& ring = vertex_ring_[v];
-    if (ring.empty() || crease_vertex_[v]) continue;  // creases are meant to bend
+  // One pseudo-observation "n . (mean of the ring - x) / h = target" for vertex v.
+  auto add = [&](size_t v, const Eigen::Vector3d& n, const std::vector<int>& ring, double target) {
     const Eigen::Vector3d x = ToEigen(mesh_->point(mesh_->vertex_handle(static_cast<int>(v))));
-    const Eigen::Vector3d n = ToEigen(mesh_->normal(mesh_->vertex_handle(static_cast<int>(v))));
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     double h = 0.0;
-    for (int j : ring) h += (ToEigen(mesh_->point(mesh_->vertex_handle(j))) - x).norm();
+    for (int j : ring) {
+      const Eigen::Vector3d xj = ToEigen(mesh_->point(mesh_->vertex_handle(j)));
+      mean += xj;
+      h += (xj - x).norm();
+    }
+    mean /= ring.size();
     h /= ring.size();
     std::vector<std::pair<int, double>> terms;
     if (vertex_unknown_[v] >= 0) terms.emplace_back(vertex_unknown_[v], -n.dot(Direction(static_cast<int>(v))) / h);
@@ -492,16 +496,31 @@ double WindowAdjustment::AccumulateCurvature(Eigen::VectorXd* rhs, long long* co
       if (vertex_unknown_[j] < 0) continue;
       terms.emplace_back(vertex_unknown_[j], n.dot(Direction(j)) / (ring.size() * h));
     }
-    if (terms.empty()) continue;
-    const double target =
-        options_.regularisation == Regularisation::kAdaptive ? curvature_target_[v] : 0.0;
-    const double l = target - current[v];
+    if (terms.empty()) return;
+    const double l = target - n.dot(mean - x) / h;
     for (const auto& [ui, ai] : terms) {
       (*rhs)[ui] += weight * ai * l;
       for (const auto& [uj, aj] : terms) normal_.Add(ui, uj, weight * ai * aj);
     }
     lpl += weight * l * l;
     ++*count;
+  };
+  // AdjustmentOptions::sector_regularisation: a crease vertex is held flat within each
+  // sector (mesh/sector_rings.h) instead of not at all.
+  std::vector<std::vector<SectorRing>> sectors;
+  if (options_.sector_regularisation) sectors = CreaseSectorRings(*mesh_, ComputeCornerNormals(*mesh_, crease_edges_));
+  for (size_t v = 0; v < vertex_ring_.size(); ++v) {
+    const auto& ring = vertex_ring_[v];
+    if (ring.empty()) continue;
+    if (crease_vertex_[v]) {  // creases are meant to bend
+      if (!sectors.empty()) {
+        for (const SectorRing& sector : sectors[v]) add(v, sector.normal, sector.ring, 0.0);
+      }
+      continue;
+    }
+    const double target =
+        options_.regularisation == Regularisation::kAdaptive ? curvature_target_[v] : 0.0;
+    add(v, ToEigen(mesh_->normal(mesh_->vertex_handle(static_cast<int>(v)))), ring, target);
   }
   return lpl;
 }
