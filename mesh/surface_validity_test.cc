@@ -1,0 +1,68 @@
+#include "mesh/surface_validity.h"
+
+#include <gtest/gtest.h>
+
+#include "mesh/local_ops.h"
+
+namespace facets {
+namespace {
+
+// 5 x 5 grid of 1 m over z = 0; the centre vertex is interior.
+TinMesh Grid() {
+  StartGridOptions grid;
+  grid.min = Eigen::Vector2d(0, 0);
+  grid.max = Eigen::Vector2d(4, 4);
+  grid.spacing = 1.0;
+  return MakeStartGrid(grid);
+}
+
+TinMesh::VertexHandle Centre(const TinMesh& mesh) {
+  for (auto v : mesh.vertices()) {
+    const auto p = mesh.point(v);
+    if (std::abs(p[0] - 2) < 1e-9 && std::abs(p[1] - 2) < 1e-9) return v;
+  }
+  return TinMesh::VertexHandle();
+}
+
+std::vector<Eigen::Vector3d> Points(const TinMesh& mesh) {
+  std::vector<Eigen::Vector3d> p;
+  for (auto v : mesh.vertices()) p.push_back(ToEigen(mesh.point(v)));
+  return p;
+}
+
+TEST(SurfaceValidity, FlatGridIsValid) {
+  const TinMesh mesh = Grid();
+  EXPECT_EQ(CountFoldedFaces(mesh), 0);
+  EXPECT_EQ(CountSelfIntersections(mesh), 0);
+}
+
+TEST(SurfaceValidity, VertexDraggedAcrossItsRingFoldsAndTheGuardUndoesIt) {
+  TinMesh mesh = Grid();
+  const std::vector<Eigen::Vector3d> before = Points(mesh);
+  const auto c = Centre(mesh);
+  ASSERT_TRUE(c.is_valid());
+  // 1.5 m sideways in the plane: past its neighbour at (3, 2), its triangles turn over.
+  mesh.set_point(c, ToOpenMesh(Eigen::Vector3d(3.5, 2.0, 0.0)));
+  const int folded = CountFoldedFaces(mesh);
+  EXPECT_GT(folded, 0);
+  const int limited = LimitFoldingSteps(&mesh, before);
+  EXPECT_GT(limited, 0);
+  EXPECT_EQ(CountFoldedFaces(mesh), 0);
+  EXPECT_EQ(CountSelfIntersections(mesh), 0);
+  // The step was halved, not necessarily undone: the vertex moved towards (3.5, 2).
+  EXPECT_GE(mesh.point(c)[0], 2.0);
+  EXPECT_LT(mesh.point(c)[0], 3.0);
+}
+
+TEST(SurfaceValidity, UnseenVertexRelaxesToItsRing) {
+  TinMesh mesh = Grid();
+  const auto c = Centre(mesh);
+  mesh.set_point(c, ToOpenMesh(Eigen::Vector3d(2.0, 2.0, -3.0)));  // a pit nobody sees
+  std::vector<int> views(mesh.n_vertices(), 5);
+  views[c.idx()] = 0;
+  EXPECT_EQ(RelaxUnseenVertices(&mesh, views), 1);
+  EXPECT_NEAR(mesh.point(c)[2], 0.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace facets
