@@ -442,8 +442,18 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       quality.max_rounds = 1;
       if (CountLongEdges(mesh, quality) == 0) break;
       relax_unseen();
+      // Splitting a crumpled wall at G1 midpoints can make triangles cross: then the
+      // level keeps its surface without the pass.
+      const TinMesh before_split = mesh;
+      const int crossing_before = CountSelfIntersections(mesh);
       const QualityReport split = QualityPass(&mesh, quality);
       UpdateVertexNormals(&mesh);
+      if (CountSelfIntersections(mesh) > crossing_before) {
+        mesh = before_split;
+        say("  level " + std::to_string(level) + " wall pass " + std::to_string(pass + 1) +
+            ": the splits made triangles cross, pass dropped");
+        break;
+      }
       say("  level " + std::to_string(level) + " wall pass " + std::to_string(pass + 1) + ": " +
           std::to_string(split.splits) + " splits, " + std::to_string(split.flips) + " flips, " +
           std::to_string(mesh.n_faces()) + " faces; sigma0 before " + std::to_string(adjusted.summary.sigma0));
