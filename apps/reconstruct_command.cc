@@ -32,6 +32,7 @@ struct ReconstructArgs {
   std::string regularisation = "curvature";
   std::string radiometry = "none";
   std::string filter = "binomial5";
+  std::string solver = WindowSolverName(AdjustmentOptions().solver);
   double break_off = AdjustmentOptions().break_off;
   int max_iterations = AdjustmentOptions().max_iterations;
   double crease_angle = AdjustmentOptions().crease_angle_deg;
@@ -97,6 +98,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.adjustment.regularisation = RegularisationFromName(args.regularisation);
   options.adjustment.radiometry = RadiometricModelFromName(args.radiometry);
   options.adjustment.break_off = args.break_off;
+  options.adjustment.solver = WindowSolverFromName(args.solver);
   options.adjustment.max_iterations = args.max_iterations;
   options.adjustment.crease_angle_deg = args.crease_angle;
   options.start_height = args.start_height;
@@ -205,6 +207,10 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--regularisation", args->regularisation, "curvature | adaptive | none")->capture_default_str();
   sub->add_option("--radiometry", args->radiometry, "none | constant | linear")->capture_default_str();
   sub->add_option("--filter", args->filter, "pyramid filter: binomial3 | binomial5 | meer13")->capture_default_str();
+  sub->add_option("--solver", args->solver,
+                  "window solver: ldlt (sparse LDL^T, pattern analysed once per window) | pcg (SSOR-PCG)")
+      ->check(CLI::IsMember({"ldlt", "pcg"}))
+      ->capture_default_str();
   sub->add_option("--break-off", args->break_off, "largest displacement at the finest level (m)")->capture_default_str();
   sub->add_option("--max-iterations", args->max_iterations, "per level")->capture_default_str();
   sub->add_option("--crease-angle", args->crease_angle, "crease detection angle (deg); 180 = pure G1")->capture_default_str();

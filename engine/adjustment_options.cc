@@ -26,6 +26,20 @@ Displacement DisplacementFromName(const std::string& name) {
   throw std::invalid_argument("unknown displacement '" + name + "' (known: normal, vertical)");
 }
 
+WindowSolver WindowSolverFromName(const std::string& name) {
+  if (name == "ldlt") return WindowSolver::kLdlt;
+  if (name == "pcg") return WindowSolver::kPcg;
+  throw std::invalid_argument("unknown window solver '" + name + "' (known: ldlt, pcg)");
+}
+
+std::string WindowSolverName(WindowSolver s) {
+  switch (s) {
+    case WindowSolver::kLdlt: return "ldlt";
+    case WindowSolver::kPcg: return "pcg";
+  }
+  return "?";
+}
+
 std::string RegularisationName(Regularisation r) {
   switch (r) {
     case Regularisation::kCurvature: return "curvature";

@@ -35,6 +35,13 @@ std::string RadiometricModelName(RadiometricModel m);
 enum class Displacement { kNormal, kVertical };
 Displacement DisplacementFromName(const std::string& name);  // normal|vertical
 
+// Solver of one window's normal equations per iteration: sparse LDL^T (ordering and
+// symbolic factorisation once per window run, numeric factorisation per iteration;
+// the factor also gives the per-vertex sigma) or SSOR-preconditioned CG (`pcg`).
+enum class WindowSolver { kLdlt, kPcg };
+WindowSolver WindowSolverFromName(const std::string& name);  // ldlt|pcg
+std::string WindowSolverName(WindowSolver s);
+
 struct AdjustmentOptions {
   Regularisation regularisation = Regularisation::kCurvature;
   // Weight of one vertex's curvature pseudo-observation, in units of the pixel
@@ -103,7 +110,8 @@ struct AdjustmentOptions {
   // nodes no pixel sees keep their value instead of making N singular.
   double grey_ridge = 1e-8;
 
-  PcgOptions pcg;
+  WindowSolver solver = WindowSolver::kLdlt;
+  PcgOptions pcg;  // WindowSolver::kPcg, and the fallback when LDL^T finds N not positive definite
   // Compute per-vertex standard deviations at the end (sparse factorisation, one
   // solve per geometry unknown): meant for windows of a few hundred triangles; above
   // max_precision_unknowns unknowns it is skipped (WindowReport::precision_computed).

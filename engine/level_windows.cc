@@ -11,6 +11,7 @@
 
 #include "mesh/creases.h"
 #include "visibility/image_selection.h"
+#include "visibility/occluder_selection.h"
 
 namespace facets {
 namespace {
@@ -41,14 +42,14 @@ Eigen::AlignedBox3d GrownBox(const TinMesh& mesh) {
 WindowReport RunWithCreasePass(TinMesh* mesh, const std::vector<LevelImage>& images,
                                const AdjustmentOptions& options, const std::vector<bool>& fixed,
                                const std::vector<bool>& judged,
-                               const Tessellation* occluder_points,
+                               const std::vector<Eigen::Vector3d>& occluder_points,
                                const std::vector<Eigen::Vector3i>& occluders,
                                bool second_pass, WindowResult* result) {
   auto run = [&]() {
     auto adjustment = std::make_unique<WindowAdjustment>(mesh, images, options);
     adjustment->SetFixedVertices(fixed);
     adjustment->SetBreakOffVertices(judged);
-    if (!occluders.empty()) adjustment->SetOccluders(occluder_points->points, occluders);
+    if (!occluders.empty()) adjustment->SetOccluders(occluder_points, occluders);
     WindowReport report = adjustment->Run();
     result->triangles = adjustment->tessellation().triangles;
     result->grey = adjustment->grey();
@@ -128,31 +129,53 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
       // The surface as it stands before this group, for the occluders: the windows of a
       // group change disjoint parts and must not read each other's half-moved state.
       Tessellation snapshot;
-      if (many && options.occluders) snapshot = TessellateWithCreases(*mesh, adjustment.crease_angle_deg);
+      std::vector<Eigen::AlignedBox3d> face_boxes;
+      if (many && options.occluders) {
+        snapshot = TessellateWithCreases(*mesh, adjustment.crease_angle_deg);
+        face_boxes = FaceBoxes(snapshot);
+      }
       tbb::parallel_for(size_t{0}, group.size(), [&](size_t g) {
         const int w = group[g];
         WindowMesh wm = ExtractWindowMesh(*mesh, windows[w]);
-        std::vector<Eigen::Vector3i> occluders;
-        if (many && options.occluders) {
-          std::vector<char> in_window(mesh->n_faces(), 0);
-          for (int f : windows[w].faces) in_window[f] = 1;
-          occluders.reserve(snapshot.triangles.size());
-          for (size_t s = 0; s < snapshot.triangles.size(); ++s) {
-            if (!in_window[s / kSubTrianglesPerFace]) occluders.push_back(snapshot.triangles[s]);
-          }
-        }
         WindowResult& result = results[w];
         result = WindowResult{};
         result.global_face = wm.global_face;
         ImageStorage storage;  // the window's image regions, freed with the window
-        const std::vector<LevelImage> seeing = images(GrownBox(wm.mesh), &storage);
+        const Eigen::AlignedBox3d grown = GrownBox(wm.mesh);
+        const std::vector<LevelImage> seeing = images(grown, &storage);
+        // Occluders: only the faces outside the window that can stand between one of
+        // the window's images and the (grown) window, as their own points.
+        std::vector<Eigen::Vector3d> occluder_points;
+        std::vector<Eigen::Vector3i> occluders;
+        if (many && options.occluders) {
+          std::vector<OccluderView> views;
+          for (const LevelImage& image : seeing) views.push_back({image.camera, image.cam_from_world});
+          std::vector<char> in_window(mesh->n_faces(), 0);
+          for (int f : windows[w].faces) in_window[f] = 1;
+          std::vector<int> point_index(snapshot.points.size(), -1);
+          for (int f : FacesThatCanHide(face_boxes, grown, views)) {
+            if (in_window[f]) continue;
+            for (int s = f * kSubTrianglesPerFace; s < (f + 1) * kSubTrianglesPerFace; ++s) {
+              Eigen::Vector3i tri;
+              for (int c = 0; c < 3; ++c) {
+                int& index = point_index[snapshot.triangles[s][c]];
+                if (index < 0) {
+                  index = static_cast<int>(occluder_points.size());
+                  occluder_points.push_back(snapshot.points[snapshot.triangles[s][c]]);
+                }
+                tri[c] = index;
+              }
+              occluders.push_back(tri);
+            }
+          }
+        }
         try {
           if (seeing.empty()) throw std::runtime_error("no image sees the window");
           const std::vector<bool> fixed =
               sweep < options.free_margin_sweeps ? std::vector<bool>(wm.fixed.size(), false) : wm.fixed;
           std::vector<bool> judged(wm.fixed.size(), !many);
           for (int local : wm.owned_local) judged[local] = true;
-          result.report = RunWithCreasePass(&wm.mesh, seeing, adjustment, fixed, judged, &snapshot,
+          result.report = RunWithCreasePass(&wm.mesh, seeing, adjustment, fixed, judged, occluder_points,
                                             occluders, options.crease_second_pass, &result);
           result.observed = true;
         } catch (const std::runtime_error& e) {

@@ -1,6 +1,7 @@
 #include "engine/pcg.h"
 
 #include <Eigen/SparseCholesky>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -116,6 +117,61 @@ Eigen::VectorXd SolveDirect(const CsrMatrix& normal, const Eigen::VectorXd& rhs)
     throw std::runtime_error("SolveDirect: normal matrix is singular or not positive definite");
   }
   return ldlt.solve(rhs);
+}
+
+struct SparseLdlt::Impl {
+  // CSR of a symmetric matrix with both triangles stored = its CSC: the Eigen matrix
+  // shares the pattern and gets the values copied in order.
+  Eigen::SparseMatrix<double> matrix;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  int64_t nnz = -1;
+};
+
+SparseLdlt::SparseLdlt() : impl_(std::make_unique<Impl>()) {}
+SparseLdlt::~SparseLdlt() = default;
+
+void SparseLdlt::Analyze(const CsrMatrix& normal) {
+  impl_->matrix = normal.ToEigen();
+  impl_->matrix.makeCompressed();
+  impl_->nnz = normal.nonZeros();
+  impl_->ldlt.analyzePattern(impl_->matrix);
+  factorized_ = false;
+  ++analyses_;
+}
+
+bool SparseLdlt::Factorize(const CsrMatrix& normal) {
+  if (impl_->nnz != normal.nonZeros() || impl_->matrix.rows() != normal.rows()) Analyze(normal);
+  const std::vector<double>& values = normal.values();
+  std::copy(values.begin(), values.end(), impl_->matrix.valuePtr());
+  impl_->ldlt.factorize(impl_->matrix);
+  factorized_ = impl_->ldlt.info() == Eigen::Success;
+  if (factorized_) {
+    const auto d = impl_->ldlt.vectorD();
+    for (Eigen::Index i = 0; i < d.size(); ++i) {
+      if (!(d[i] > 0.0)) {
+        factorized_ = false;
+        break;
+      }
+    }
+  }
+  return factorized_;
+}
+
+Eigen::VectorXd SparseLdlt::Solve(const Eigen::VectorXd& rhs) const {
+  if (!factorized_) throw std::logic_error("SparseLdlt::Solve: no factor");
+  return impl_->ldlt.solve(rhs);
+}
+
+Eigen::VectorXd SparseLdlt::InverseDiagonal(const std::vector<int>& unknowns) const {
+  if (!factorized_) throw std::logic_error("SparseLdlt::InverseDiagonal: no factor");
+  Eigen::VectorXd out(unknowns.size());
+  Eigen::VectorXd unit = Eigen::VectorXd::Zero(impl_->matrix.rows());
+  for (size_t k = 0; k < unknowns.size(); ++k) {
+    unit[unknowns[k]] = 1.0;
+    out[k] = impl_->ldlt.solve(unit)[unknowns[k]];
+    unit[unknowns[k]] = 0.0;
+  }
+  return out;
 }
 
 Eigen::VectorXd InverseDiagonal(const CsrMatrix& normal, const std::vector<int>& unknowns) {

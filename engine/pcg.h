@@ -5,7 +5,10 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "engine/csr_matrix.h"
 
@@ -44,5 +47,37 @@ Eigen::VectorXd SolveDirect(const CsrMatrix& normal, const Eigen::VectorXd& rhs)
 // per-vertex standard deviations of a window (a few hundred geometry unknowns), where
 // this costs far less than the adjustment itself.
 Eigen::VectorXd InverseDiagonal(const CsrMatrix& normal, const std::vector<int>& unknowns);
+
+// Sparse direct LDL^T (Eigen SimplicialLDLT, AMD ordering) for a sequence of normal
+// matrices with one CSR pattern, e.g. the iterations of one window adjustment: the
+// ordering and the symbolic factorisation are computed once (Analyze), every
+// iteration only refactorises the values (Factorize). The window's pattern is fixed
+// for one run (cliques of faces and curvature rings, not of what the images see).
+class SparseLdlt {
+ public:
+  SparseLdlt();
+  ~SparseLdlt();
+  SparseLdlt(const SparseLdlt&) = delete;
+  SparseLdlt& operator=(const SparseLdlt&) = delete;
+
+  // Symbolic analysis of the pattern of `normal` (values ignored).
+  void Analyze(const CsrMatrix& normal);
+  // Numeric factorisation; re-analyses when the pattern differs from the analysed one
+  // (row count or non-zero count changed). Returns false when N is not positive
+  // definite (a zero or negative pivot).
+  bool Factorize(const CsrMatrix& normal);
+  bool factorized() const { return factorized_; }
+  Eigen::VectorXd Solve(const Eigen::VectorXd& rhs) const;
+  // Diagonal entries of N^-1 for the listed unknowns from the current factor.
+  Eigen::VectorXd InverseDiagonal(const std::vector<int>& unknowns) const;
+  // How often the pattern was analysed (1 per window run when it stays fixed).
+  int analyses() const { return analyses_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  bool factorized_ = false;
+  int analyses_ = 0;
+};
 
 }  // namespace facets

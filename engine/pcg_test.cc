@@ -94,6 +94,32 @@ TEST(Pcg, InverseDiagonalMatchesDenseInverse) {
   }
 }
 
+// The window solver: one analysis of the pattern, then a factorisation per set of
+// values (two matrices with the same pattern, as two iterations of a window give).
+TEST(SparseLdlt, AnalysesOnceAndMatchesDirectAndInverse) {
+  Eigen::VectorXd rhs;
+  CsrMatrix normal = GridNormalEquations(30, &rhs);
+  SparseLdlt ldlt;
+  ldlt.Analyze(normal);
+  for (int round = 0; round < 2; ++round) {
+    if (round == 1) {
+      for (int i = 0; i < normal.rows(); ++i) normal.Add(i, i, 0.5 + 0.01 * i);  // new values, same pattern
+    }
+    ASSERT_TRUE(ldlt.Factorize(normal));
+    const Eigen::VectorXd direct = SolveDirect(normal, rhs);
+    const Eigen::VectorXd x = ldlt.Solve(rhs);
+    EXPECT_LT((x - direct).norm() / direct.norm(), 1e-12);
+    const std::vector<int> unknowns = {0, 7, 450, 899};
+    const Eigen::VectorXd diag = ldlt.InverseDiagonal(unknowns);
+    const Eigen::VectorXd reference = InverseDiagonal(normal, unknowns);
+    for (size_t k = 0; k < unknowns.size(); ++k) EXPECT_NEAR(diag[k], reference[k], 1e-12 * reference[k]);
+  }
+  EXPECT_EQ(ldlt.analyses(), 1);
+  // A matrix that is not positive definite is refused (the window falls back to PCG).
+  for (int i = 0; i < normal.rows(); ++i) normal.values()[normal.diagonal_index()[i]] = -1.0;
+  EXPECT_FALSE(ldlt.Factorize(normal));
+}
+
 TEST(Pcg, RejectsBadOptions) {
   PcgOptions options;
   options.ssor_omega = 2.0;

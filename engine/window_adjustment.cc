@@ -553,6 +553,7 @@ WindowReport WindowAdjustment::Run() {
   if (!occluder_triangles_.empty()) scene_->SetOccluders(tess_, occluder_points_, occluder_triangles_);
   BuildTopologyTables();
   BuildPattern();
+  if (options_.solver == WindowSolver::kLdlt) ldlt_.Analyze(normal_);
 
   const int num_vertices = static_cast<int>(mesh_->n_vertices());
   std::vector<std::vector<PixelObservation>> casts;
@@ -594,9 +595,14 @@ WindowReport WindowAdjustment::Run() {
 
     start = std::chrono::steady_clock::now();
     solution = Eigen::VectorXd::Zero(num_unknowns_);
-    const PcgSummary pcg = SolvePcg(normal_, rhs, options_.pcg, &solution);
+    if (options_.solver == WindowSolver::kLdlt && ldlt_.Factorize(normal_)) {
+      solution = ldlt_.Solve(rhs);
+    } else {
+      // PCG, also when LDL^T met a non-positive pivot (N numerically indefinite).
+      const PcgSummary pcg = SolvePcg(normal_, rhs, options_.pcg, &solution);
+      it.cg_iterations = pcg.iterations;
+    }
     rhs_ = rhs;
-    it.cg_iterations = pcg.iterations;
     it.seconds_solve = Seconds(start);
 
     const long long redundancy = count + pseudo - determined;
@@ -691,7 +697,9 @@ WindowReport WindowAdjustment::Run() {
     const auto start = std::chrono::steady_clock::now();
     std::vector<int> geometry(num_geometry_);
     for (int i = 0; i < num_geometry_; ++i) geometry[i] = i;
-    const Eigen::VectorXd q = InverseDiagonal(normal_, geometry);
+    // The last iteration's N: with LDL^T its factor is at hand.
+    const Eigen::VectorXd q =
+        ldlt_.factorized() ? ldlt_.InverseDiagonal(geometry) : InverseDiagonal(normal_, geometry);
     for (int v = 0; v < num_vertices; ++v) {
       if (vertex_unknown_[v] >= 0) report.vertex_sigma[v] = report.sigma0 * std::sqrt(std::max(q[vertex_unknown_[v]], 0.0));
     }

@@ -6,7 +6,7 @@
 //
 // One iteration: update the G1 tessellation and its Embree scene, cast every pixel ray
 // of every image (first hit only), linearise, assemble the normal equations straight
-// into CSR, solve by SSOR-PCG, move the vertices along their normals and update grey
+// into CSR, solve (sparse LDL^T, pattern analysed once per run; or SSOR-PCG), move the vertices along their normals and update grey
 // values and radiometry; until the break-off criterion holds.
 #pragma once
 
@@ -18,6 +18,7 @@
 
 #include "engine/adjustment_options.h"
 #include "engine/csr_matrix.h"
+#include "engine/pcg.h"
 #include "io/camera.h"
 #include "io/image_io.h"
 #include "io/rigid3d.h"
@@ -46,7 +47,7 @@ enum VertexFlag : uint8_t {
 struct IterationReport {
   int iteration = 0;
   long long observations = 0;
-  int cg_iterations = 0;
+  int cg_iterations = 0;  // 0 when LDL^T solved the iteration
   double sigma0 = 0.0;           // of this linearisation, grey values
   // AdjustmentOptions::background_below / robust_k / reject_k: pixels dropped as
   // background, observations rejected and down-weighted, and the robust scale
@@ -182,6 +183,7 @@ class WindowAdjustment {
   int num_unknowns_ = 0;
   CsrMatrix normal_;
   Eigen::VectorXd rhs_;
+  SparseLdlt ldlt_;  // WindowSolver::kLdlt: analysed once per Run, factorised per iteration
   // Per face and channel, CSR slots of the 18 face-local unknowns (3 vertices then 15
   // nodes of that channel): slots_[(f * C + c) * 324 + 18 * i + j], -1 if fixed.
   std::vector<int64_t> slots_;

@@ -3,6 +3,7 @@
 // true surface shifted down, adjusts on the finest level and compares with the truth.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -33,6 +34,7 @@ struct SeedResult {
                              // of faces away from the window border), m
   double mean_sigma = 0.0;   // mean reported sigma of dn, interior vertices (m)
   double rms_patch = 0.0, mean_sigma_patch = 0.0, mean_sigma_outside = 0.0;
+  std::vector<Eigen::Vector3d> vertices;  // adjusted positions
 };
 
 struct SeedRun {
@@ -83,6 +85,7 @@ SeedResult RunSeedWindow(const SeedRun& run) {
   result.report = adjustment.Run();
   result.normal = adjustment.normal_equations();
   result.rhs = adjustment.right_hand_side();
+  for (auto vh : mesh.vertices()) result.vertices.push_back(ToEigen(mesh.point(vh)));
 
   // Constant-grey patch of the scene, if any (albedo patches in XY).
   double sum2 = 0, sum_sigma = 0, patch2 = 0, patch_sigma = 0, outside_sigma = 0;
@@ -205,6 +208,32 @@ TEST(SeedWindow, SsorPcgOnRealNormalEquations) {
             << " iterations (rel. error " << err_jacobi << ")\n";
   EXPECT_LT(err_ssor, 1e-8);
   EXPECT_LE(2 * s.iterations, j.iterations);
+}
+
+// The window solvers (AdjustmentOptions::solver): sparse LDL^T (default) and SSOR-PCG
+// give the same adjusted window: vertex differences far below the vertices' sigma.
+TEST(SeedWindow, LdltAndPcgGiveTheSameWindow) {
+  SeedRun run;
+  run.options.break_off = 0.005;
+  run.options.solver = WindowSolver::kLdlt;
+  const SeedResult ldlt = RunSeedWindow(run);
+  run.options.solver = WindowSolver::kPcg;
+  const SeedResult pcg = RunSeedWindow(run);
+  ASSERT_EQ(ldlt.vertices.size(), pcg.vertices.size());
+  EXPECT_EQ(ldlt.report.iterations.size(), pcg.report.iterations.size());
+  EXPECT_EQ(ldlt.report.cg_iterations_total, 0);
+  double worst = 0.0, worst_sigma = 0.0;
+  for (size_t v = 0; v < ldlt.vertices.size(); ++v) {
+    const double sigma = ldlt.report.vertex_sigma[v];
+    if (sigma <= 0.0) continue;
+    worst = std::max(worst, (ldlt.vertices[v] - pcg.vertices[v]).norm() / sigma);
+    worst_sigma = std::max(worst_sigma, std::abs(sigma - pcg.report.vertex_sigma[v]) / sigma);
+  }
+  std::cout << "LDL^T vs SSOR-PCG: worst vertex difference " << worst << " sigma, worst sigma difference "
+            << worst_sigma << " (relative); sigma0 " << ldlt.report.sigma0 << " vs " << pcg.report.sigma0 << "\n";
+  EXPECT_LT(worst, 1e-3);
+  EXPECT_LT(worst_sigma, 1e-6);
+  EXPECT_NEAR(ldlt.report.sigma0, pcg.report.sigma0, 1e-6 * pcg.report.sigma0);
 }
 
 // Adaptive regularisation (seed 003) on the same pair: the same accuracy class.

@@ -1,0 +1,113 @@
+// FacesThatCanHide (visibility/occluder_selection.h) on a real Embree scene: every
+// face that is the first hit of a pixel ray which would otherwise reach the window
+// must be selected; and the selection must be a real cut of the surroundings.
+#include "visibility/occluder_selection.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <iostream>
+#include <set>
+
+#include "visibility/pixel_cast.h"
+#include "visibility/surface_scene.h"
+#include "visibility/test_util.h"
+
+namespace facets {
+namespace {
+
+Rigid3d LookAtPose(const Eigen::Vector3d& centre, const Eigen::Vector3d& target) {
+  const Eigen::Vector3d z = (target - centre).normalized();
+  const Eigen::Vector3d up = std::abs(z.z()) > 0.99 ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d x = z.cross(up).normalized();
+  const Eigen::Vector3d y = z.cross(x);
+  Eigen::Matrix3d world_from_cam;
+  world_from_cam << x, y, z;
+  const Eigen::Matrix3d cam_from_world = world_from_cam.transpose();
+  return Rigid3d(Eigen::Quaterniond(cam_from_world), -(cam_from_world * centre));
+}
+
+TEST(OccluderSelection, EveryFaceThatHidesTheWindowIsSelected) {
+  // 60 m x 60 m wavy terrain of 2 m cells and a few buildings, one of them right next to
+  // the window (a 12 m x 12 m patch of terrain in the middle).
+  FlatMesh mesh;
+  auto height = [](double x, double y) { return 0.8 * std::sin(0.15 * x) + 0.5 * std::cos(0.2 * y); };
+  AppendGridForTesting(-30, -30, 30, 30, 30, 30, height, &mesh);
+  const int num_ground_faces = static_cast<int>(mesh.faces.size());
+  AppendBoxForTesting({7, -4, -1}, {12, 4, 9}, false, &mesh);
+  AppendBoxForTesting({-4, -14, -1}, {4, -8, 12}, false, &mesh);
+  AppendBoxForTesting({-20, 15, -1}, {-12, 22, 15}, false, &mesh);
+  AppendBoxForTesting({18, -25, -1}, {25, -18, 6}, false, &mesh);
+  const Tessellation tess = TessellateFlatForTesting(mesh);
+  const int num_faces = static_cast<int>(mesh.faces.size());
+
+  std::vector<char> in_window(num_faces, 0);
+  FlatMesh window;
+  window.vertices = mesh.vertices;
+  for (int f = 0; f < num_ground_faces; ++f) {
+    const Eigen::Vector3d c = (mesh.vertices[mesh.faces[f][0]] + mesh.vertices[mesh.faces[f][1]] +
+                               mesh.vertices[mesh.faces[f][2]]) / 3.0;
+    if (std::abs(c.x()) < 6 && std::abs(c.y()) < 6) {
+      in_window[f] = 1;
+      window.faces.push_back(mesh.faces[f]);
+    }
+  }
+  const Tessellation window_tess = TessellateFlatForTesting(window);
+  const std::vector<Eigen::AlignedBox3d> boxes = FaceBoxes(tess);
+  Eigen::AlignedBox3d target;
+  for (int f = 0; f < num_faces; ++f) {
+    if (in_window[f]) target.extend(boxes[f]);
+  }
+
+  const Camera camera = Camera::Create(CameraModel::kPinhole, 300, 300, 160, 120, 320, 240);
+  std::vector<OccluderView> views;
+  std::vector<Rigid3d> poses = {LookAtPose({0, 0, 60}, {0, 0, 0}),      LookAtPose({-40, 0, 40}, {0, 0, 0}),
+                                LookAtPose({40, 5, 35}, {0, 0, 0}),     LookAtPose({0, -45, 30}, {0, 0, 0}),
+                                LookAtPose({5, 40, 30}, {0, 2, 0}),     LookAtPose({30, 30, 50}, {10, 10, 0})};
+  for (const Rigid3d& pose : poses) views.push_back({&camera, pose});
+  const std::vector<int> selected = FacesThatCanHide(boxes, target, views);
+  const std::set<int> selected_set(selected.begin(), selected.end());
+
+  const SurfaceScene whole(tess, /*refittable=*/false);
+  const SurfaceScene window_only(window_tess, /*refittable=*/false);
+  CastOptions options;
+  options.keep_invalid = true;
+  options.cull_back_faces = false;
+  options.min_cos_incidence = 0.0;
+  long long window_rays = 0, hidden = 0, missing = 0;
+  std::set<int> hiders;
+  for (const Rigid3d& pose : poses) {
+    const CastResult a = CastPixels(whole, camera, pose, PixelRect::Full(camera), options);
+    const CastResult b = CastPixels(window_only, camera, pose, PixelRect::Full(camera), options);
+    ASSERT_EQ(a.observations.size(), b.observations.size());
+    for (size_t i = 0; i < a.observations.size(); ++i) {
+      if (b.observations[i].status == RayStatus::kMiss) continue;  // the ray does not reach the window
+      ++window_rays;
+      const int face = a.observations[i].face;
+      ASSERT_GE(face, 0);
+      if (in_window[face]) continue;
+      ++hidden;
+      hiders.insert(face);
+      if (!selected_set.count(face)) ++missing;
+    }
+  }
+  std::cout << "occluder selection: " << selected.size() << " of " << num_faces << " faces selected, "
+            << window_rays << " rays reach the window, " << hidden << " of them hidden by " << hiders.size()
+            << " faces, " << missing << " by unselected faces\n";
+  EXPECT_GT(hidden, 1000);
+  EXPECT_EQ(missing, 0);
+  EXPECT_LT(selected.size(), static_cast<size_t>(num_faces) / 2);
+}
+
+// Without views nothing can hide anything; a box behind every camera neither.
+TEST(OccluderSelection, NothingWithoutViews) {
+  std::vector<Eigen::AlignedBox3d> boxes = {Eigen::AlignedBox3d(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 1))};
+  EXPECT_TRUE(FacesThatCanHide(boxes, boxes[0], {}).empty());
+  const Camera camera = Camera::Create(CameraModel::kPinhole, 300, 300, 160, 120, 320, 240);
+  const Rigid3d pose = LookAtPose({0, 0, 50}, {0, 0, 100});  // looks up, away from the boxes
+  EXPECT_TRUE(FacesThatCanHide(boxes, boxes[0], {{&camera, pose}}).empty());
+}
+
+}  // namespace
+}  // namespace facets
