@@ -12,7 +12,11 @@
 #include <vector>
 
 #include "io/atomic_file.h"
+#include "io/colmap_io.h"
+#include "io/ply_io.h"
+#include "io/project_io.h"
 #include "scenes/evaluate.h"
+#include "visibility/silhouette.h"
 
 namespace facets {
 namespace {
@@ -25,10 +29,50 @@ struct EvaluateArgs {
   std::optional<double> spacing_gsd;
   std::optional<int> min_views;
   std::vector<double> roi;  // xmin ymin zmin xmax ymax zmax, empty = the truth's
+  // --silhouette: the mesh's outline in every image against the image's foreground.
+  bool silhouette = false;
+  std::string colmap, images, project, mask_dir;
+  ForegroundOptions foreground;
 };
+
+void RunSilhouette(const EvaluateArgs& args) {
+  ImageBlock block;
+  if (!args.project.empty()) {
+    block = ReadProject(args.project);
+  } else if (!args.colmap.empty() && !args.images.empty()) {
+    block = ReadColmapModel(args.colmap, args.images);
+  } else {
+    throw std::invalid_argument(
+        "--silhouette needs --project FILE, or --colmap SPARSE_DIR and --images IMAGE_DIR");
+  }
+  const auto start = std::chrono::steady_clock::now();
+  MeshData mesh = ReadMesh(args.mesh);
+  mesh.Check(args.mesh);
+  // The mesh is in the block's local frame when both share the origin; a mesh written
+  // with another origin is moved into the block's frame.
+  const Eigen::Vector3d shift = mesh.origin - block.origin;
+  for (Eigen::Vector3d& v : mesh.vertices) v += shift;
+  const SilhouetteReport report =
+      EvaluateSilhouettes(block, mesh.vertices, mesh.faces, args.foreground, args.mask_dir);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::cout << "silhouettes of " << args.mesh << " (background: grey <= "
+            << args.foreground.background_max
+            << (args.foreground.largest_component ? ", largest component" : "") << ")\n"
+            << report.Table() << "\n  time " << seconds << " s\n";
+  if (!args.json.empty()) {
+    WriteFileAtomically(args.json, report.Json() + "\n");
+    std::cout << "  json " << args.json << "\n";
+  }
+}
 
 
 void RunEvaluate(const EvaluateArgs& args) {
+  if (args.silhouette) {
+    RunSilhouette(args);
+    return;
+  }
+  if (args.truth.empty()) throw std::invalid_argument("--truth is required (or --silhouette)");
   EvaluationOptions options;
   if (args.spacing_gsd) options.sample_spacing_gsd = *args.spacing_gsd;
   if (args.min_views) options.min_views = *args.min_views;
@@ -61,7 +105,6 @@ void AddEvaluateCommand(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "evaluate", "score a reconstructed mesh against a rendered truth: accuracy, completeness");
   sub->add_option("--truth", args->truth, "truth folder written by `facets render`")
-      ->required()
       ->check(CLI::ExistingDirectory);
   sub->add_option("--mesh", args->mesh, "reconstructed mesh (.ply or .obj)")
       ->required()
@@ -77,6 +120,32 @@ void AddEvaluateCommand(CLI::App& app) {
   sub->add_option("--roi", args->roi,
                   "score only inside xmin ymin zmin xmax ymax zmax (local; default: the truth's)")
       ->expected(6);
+  sub->add_flag("--silhouette", args->silhouette,
+                "instead: IoU of the mesh's outline and each image's foreground (needs "
+                "--colmap and --images, or --project)");
+  sub->add_option("--colmap", args->colmap, "COLMAP text model folder (--silhouette)")
+      ->check(CLI::ExistingDirectory);
+  sub->add_option("--images", args->images, "image folder of the COLMAP model (--silhouette)")
+      ->check(CLI::ExistingDirectory);
+  sub->add_option("--project", args->project, "native project file (--silhouette)")
+      ->check(CLI::ExistingFile);
+  sub->add_option("--background-below", args->foreground.background_max,
+                  "--silhouette: grey values <= this are background")
+      ->capture_default_str();
+  sub->add_flag("--largest-component", args->foreground.largest_component,
+                "--silhouette: the foreground is the largest 8-connected component only");
+  sub->add_option("--min-component", args->foreground.min_component_pixels,
+                  "--silhouette: drop foreground components of fewer pixels")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--open", args->foreground.open_radius,
+                  "--silhouette: morphological opening radius (px) before the components")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--fill-holes", args->foreground.fill_holes_below,
+                  "--silhouette: enclosed background holes below this many pixels are foreground")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--mask-dir", args->mask_dir,
+                  "--silhouette: write one PNG per image (255 both, 170 foreground only, 85 "
+                  "mesh only)");
   sub->callback([args] {
     try {
       RunEvaluate(*args);

@@ -25,6 +25,12 @@
 namespace facets {
 namespace {
 
+// Defaults that depend on the job (docs/EXPERIMENTS.md "Closed objects"): the break-off
+// in ground pixels of each level, robust weights for closed objects.
+constexpr double kDefaultBreakOffGsd = 0.06;
+constexpr double kClosedRobustK = 2.0;
+constexpr double kClosedRejectK = 5.0;
+
 struct ReconstructArgs {
   std::string colmap, images, project, out;
   int levels = 3;
@@ -33,7 +39,7 @@ struct ReconstructArgs {
   std::string radiometry = "none";
   std::string filter = "binomial5";
   std::string solver = WindowSolverName(AdjustmentOptions().solver);
-  double break_off = AdjustmentOptions().break_off;
+  std::optional<double> break_off;  // m; none: 0.06 ground pixel of each level
   int max_iterations = AdjustmentOptions().max_iterations;
   double crease_angle = AdjustmentOptions().crease_angle_deg;
   std::optional<double> start_height;
@@ -46,8 +52,9 @@ struct ReconstructArgs {
   std::string closed_shape = ClosedStartOptions().shape;
   double closed_lifting_range = ClosedStartOptions().lifting_range;
   double background_below = AdjustmentOptions().background_below;
-  double robust = AdjustmentOptions().robust_k;
-  double reject = AdjustmentOptions().reject_k;
+  // None: 2 and 5 for closed starts (pixels past a silhouette see the background),
+  // off otherwise.
+  std::optional<double> robust, reject;
   bool colour = false;
   int window_faces = WindowPartitionOptions().max_faces;
   int window_margin = WindowPartitionOptions().margin_rings;
@@ -97,8 +104,12 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.adjustment.lambda = args.lambda;
   options.adjustment.regularisation = RegularisationFromName(args.regularisation);
   options.adjustment.radiometry = RadiometricModelFromName(args.radiometry);
-  options.adjustment.break_off = args.break_off;
   options.adjustment.solver = WindowSolverFromName(args.solver);
+  if (args.break_off) {
+    options.adjustment.break_off = *args.break_off;
+  } else {
+    options.break_off_gsd = kDefaultBreakOffGsd;
+  }
   options.adjustment.max_iterations = args.max_iterations;
   options.adjustment.crease_angle_deg = args.crease_angle;
   options.start_height = args.start_height;
@@ -123,8 +134,9 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.closed.lifting_steps = args.lifting_steps;
   options.closed.lifting_range = args.closed_lifting_range;
   options.adjustment.background_below = args.background_below;
-  options.adjustment.robust_k = args.robust;
-  options.adjustment.reject_k = args.reject;
+  const bool closed = options.start_closed || !args.start_mesh.empty();
+  options.adjustment.robust_k = args.robust.value_or(closed ? kClosedRobustK : 0.0);
+  options.adjustment.reject_k = args.reject.value_or(closed ? kClosedRejectK : 0.0);
   options.windows.partition.max_faces = args.window_faces;
   options.windows.partition.margin_rings = args.window_margin;
   options.windows.sweeps = args.sweeps;
@@ -211,7 +223,7 @@ void AddReconstructCommand(CLI::App& app) {
                   "window solver: ldlt (sparse LDL^T, pattern analysed once per window) | pcg (SSOR-PCG)")
       ->check(CLI::IsMember({"ldlt", "pcg"}))
       ->capture_default_str();
-  sub->add_option("--break-off", args->break_off, "largest displacement at the finest level (m)")->capture_default_str();
+  sub->add_option("--break-off", args->break_off, "largest displacement at the finest level (m); default 0.06 ground pixel of each level");
   sub->add_option("--max-iterations", args->max_iterations, "per level")->capture_default_str();
   sub->add_option("--crease-angle", args->crease_angle, "crease detection angle (deg); 180 = pure G1")->capture_default_str();
   sub->add_option("--start-height", args->start_height, "height of the start plane (local Z)");
@@ -234,8 +246,8 @@ void AddReconstructCommand(CLI::App& app) {
                   "object lifting of a closed start: scale factors over 1 +- range/2")->capture_default_str();
   sub->add_option("--background-below", args->background_below,
                   "pixels with grey value at or below this are background, no observation (negative = off)")->capture_default_str();
-  sub->add_option("--robust", args->robust, "Huber weights beyond K robust sigmas (0 = off)")->capture_default_str();
-  sub->add_option("--reject", args->reject, "reject residuals beyond R robust sigmas (0 = off)")->capture_default_str();
+  sub->add_option("--robust", args->robust, "Huber weights beyond K robust sigmas (0 = off; default 2 for closed starts, else off)");
+  sub->add_option("--reject", args->reject, "reject residuals beyond R robust sigmas (0 = off; default 5 for closed starts, else off)");
   sub->add_flag("--colour", args->colour, "one grey value per channel (geometry shared)");
   sub->add_option("--window-faces", args->window_faces, "most core triangles per window")->capture_default_str();
   sub->add_option("--window-margin", args->window_margin, "face rings around a window's core")->capture_default_str();

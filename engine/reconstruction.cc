@@ -165,6 +165,7 @@ void ReconstructionOptions::Check() const {
   if (levels < 1 || levels > 10) fail("levels must lie in 1..10");
   if (!(facet_pixels > 0.5)) fail("facet_pixels must be > 0.5");
   if (lifting_steps < 0) fail("lifting_steps must be >= 0");
+  if (!(break_off_gsd >= 0.0)) fail("break_off_gsd must be >= 0");
   if (wall_passes < 0 || wall_passes > 10) fail("wall_passes must lie in 0..10");
   if (lifting_steps > 0 && !(lifting_range > 0)) fail("lifting_range must be > 0");
   if (roi && !(roi->max.array() > roi->min.array()).head<2>().all()) {
@@ -207,6 +208,7 @@ std::string ReconstructionReport::Json() const {
     l["level"] = level.level;
     l["ground_pixel"] = level.ground_pixel;
     l["edge_length"] = level.edge_length;
+    l["break_off"] = level.break_off;
     l["vertices"] = level.vertices;
     l["faces"] = level.faces;
     l["seconds"] = level.seconds;
@@ -340,7 +342,9 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
   };
   auto level_options = [&](int level) {
     AdjustmentOptions adjustment = options.adjustment;
-    adjustment.break_off *= std::pow(2.0, level);
+    adjustment.break_off = options.break_off_gsd > 0.0
+                               ? options.break_off_gsd * gsd0 * std::pow(2.0, level)
+                               : adjustment.break_off * std::pow(2.0, level);
     if (adjustment.max_step == 0.0) adjustment.max_step = 0.5 * edge_length(level);
     adjustment.compute_precision = options.adjustment.compute_precision && level == 0;
     return adjustment;
@@ -417,11 +421,13 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     level_report.level = level;
     level_report.ground_pixel = gsd0 * std::pow(2.0, level);
     level_report.edge_length = edge_length(level);
+    level_report.break_off = level_options(level).break_off;
     level_report.vertices = static_cast<int>(mesh.n_vertices());
     level_report.faces = static_cast<int>(mesh.n_faces());
     say("stage adjust: level " + std::to_string(level) + " (" + std::to_string(coarsest - level + 1) +
         "/" + std::to_string(num_levels) + "), " + std::to_string(mesh.n_faces()) +
-        " faces, ground pixel " + std::to_string(level_report.ground_pixel) + " m");
+        " faces, ground pixel " + std::to_string(level_report.ground_pixel) + " m, break-off " +
+        std::to_string(level_report.break_off) + " m");
     LevelAdjustment adjusted = AdjustLevelInWindows(&mesh, window_images(level), level_options(level),
                                                     options.windows, level == 0, options.progress);
     // Vertices no image saw (a sheet folded under a roof that rose) fall back to the

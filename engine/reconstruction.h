@@ -32,6 +32,11 @@ struct ReconstructionOptions {
   // Options of every window adjustment; break_off is the finest level's bound and is
   // doubled per coarser level.
   AdjustmentOptions adjustment;
+  // > 0: the break-off of each level is this many of the level's ground pixels instead
+  // of adjustment.break_off (doubled per level): a bound in metres suits one scale only
+  // (0.01 m is 0.04 pixel of the seeds' 0.24 m but 3 pixels of a 3 mm object pixel).
+  // `facets reconstruct` sets 0.06 when --break-off is not given.
+  double break_off_gsd = 0.0;
   // Window size, margin, sweeps (engine/level_windows.h).
   LevelWindowOptions windows;
   // Edge of a grey facet in pixels of the level's images (the seeds: about 2).
@@ -114,6 +119,7 @@ struct LevelReport {
   int level = 0;               // 0 = finest
   double ground_pixel = 0.0;   // mean ground pixel size of the level's images (m)
   double edge_length = 0.0;    // target TIN edge length (m)
+  double break_off = 0.0;      // interior break-off bound of the level (m)
   int vertices = 0;
   int faces = 0;
   WindowReport window;                 // the level's summary (LevelAdjustment::summary)
