@@ -72,7 +72,8 @@ int CastPacket(RTCScene scene, const PixelRays& rays, const int* xs, const int* 
       if (options.keep_invalid) out[written++] = obs;
       continue;
     }
-    if (packet.hit.geomID[i] != 0) {
+    // Occluders are an instance (TriangleScene::AddOccluders): hit.instID set.
+    if (packet.hit.instID[0][i] != RTC_INVALID_GEOMETRY_ID || packet.hit.geomID[i] != 0) {
       obs.status = RayStatus::kOccluded;
       ++stats->occluded;
       if (options.keep_invalid) out[written++] = obs;
