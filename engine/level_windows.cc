@@ -175,7 +175,11 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
               sweep < options.free_margin_sweeps ? std::vector<bool>(wm.fixed.size(), false) : wm.fixed;
           std::vector<bool> judged(wm.fixed.size(), !many);
           for (int local : wm.owned_local) judged[local] = true;
-          result.report = RunWithCreasePass(&wm.mesh, seeing, adjustment, fixed, judged, occluder_points,
+          // Per-vertex sigma is taken from the last sweep only: earlier sweeps skip the
+          // precision (one solve per geometry unknown).
+          AdjustmentOptions sweep_options = adjustment;
+          if (sweep + 1 < sweeps) sweep_options.compute_precision = false;
+          result.report = RunWithCreasePass(&wm.mesh, seeing, sweep_options, fixed, judged, occluder_points,
                                             occluders, options.crease_second_pass, &result);
           result.observed = true;
         } catch (const std::runtime_error& e) {

@@ -244,6 +244,8 @@ std::string ReconstructionReport::Json() const {
         window["per_iteration"].push_back(
             {{"iteration", it.iteration},
              {"observations", it.observations},
+             {"rays", it.rays},
+             {"rect_pixels", it.rect_pixels},
              {"cg_iterations", it.cg_iterations},
              {"sigma0", it.sigma0},
              {"robust_scale", it.robust_scale},

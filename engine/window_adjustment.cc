@@ -16,6 +16,7 @@
 #include "mesh/sector_rings.h"
 #include "mesh/surface_validity.h"
 #include "visibility/image_selection.h"
+#include "visibility/occluder_selection.h"
 #include "visibility/surface_scene.h"
 
 namespace facets {
@@ -238,25 +239,38 @@ void WindowAdjustment::BuildPattern() {
   });
 }
 
-long long WindowAdjustment::CastAll(std::vector<std::vector<PixelObservation>>* casts) {
+long long WindowAdjustment::CastAll(std::vector<std::vector<PixelObservation>>* casts, IterationReport* it) {
   Eigen::AlignedBox3d box;
   for (const auto& p : tess_.points) box.extend(p);
+  // Only the 8x8 pixel blocks onto which some face of the window projects: the rest of
+  // the window's rectangle sees the surroundings only.
+  const std::vector<Eigen::AlignedBox3d> face_boxes = FaceBoxes(tess_);
   CastOptions cast_options;
   cast_options.min_cos_incidence = options_.min_cos_incidence;
   casts->assign(images_.size(), {});
-  long long total = 0;
-  for (size_t k = 0; k < images_.size(); ++k) {
+  std::vector<long long> image_rays(images_.size(), 0), image_rect(images_.size(), 0);
+  tbb::parallel_for(size_t{0}, images_.size(), [&](size_t k) {
     const auto rect = ProjectBox(box, *images_[k].camera, images_[k].cam_from_world);
-    if (!rect) continue;
+    if (!rect) return;
     // Only pixels the window was given (a region of the image when read per window).
     const ImagePlanes& pixels = *images_[k].pixels;
     const PixelRect held{pixels.x0, pixels.y0, pixels.x0 + pixels.width, pixels.y0 + pixels.height};
     const PixelRect cast = rect->Intersection(held);
-    if (cast.Empty()) continue;
-    (*casts)[k] = CastPixels(*scene_, *images_[k].camera, images_[k].cam_from_world, cast,
-                             cast_options).observations;
-    total += static_cast<long long>((*casts)[k].size());
+    if (cast.Empty()) return;
+    image_rect[k] = cast.Area();
+    const std::vector<PixelRect> blocks =
+        ProjectedBlocks(face_boxes, *images_[k].camera, images_[k].cam_from_world, cast);
+    CastResult result = CastPixels(*scene_, *images_[k].camera, images_[k].cam_from_world, blocks, cast_options);
+    image_rays[k] = result.stats.rays;
+    (*casts)[k] = std::move(result.observations);
+  });
+  it->rays = it->rect_pixels = 0;
+  for (size_t k = 0; k < images_.size(); ++k) {
+    it->rays += image_rays[k];
+    it->rect_pixels += image_rect[k];
   }
+  long long total = 0;
+  for (const auto& list : *casts) total += static_cast<long long>(list.size());
   return total;
 }
 
@@ -565,7 +579,7 @@ WindowReport WindowAdjustment::Run() {
     IterationReport it;
     it.iteration = iteration;
     auto start = std::chrono::steady_clock::now();
-    it.observations = CastAll(&casts);
+    it.observations = CastAll(&casts, &it);
     it.background = DropBackground(&casts);
     it.observations -= it.background;
     it.seconds_cast = Seconds(start);

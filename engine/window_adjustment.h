@@ -47,6 +47,8 @@ enum VertexFlag : uint8_t {
 struct IterationReport {
   int iteration = 0;
   long long observations = 0;
+  long long rays = 0;  // pixel rays cast (the 8x8 blocks the window's faces project to)
+  long long rect_pixels = 0;  // pixels of the window's rectangles in its images (cast without the blocks)
   int cg_iterations = 0;  // 0 when LDL^T solved the iteration
   double sigma0 = 0.0;           // of this linearisation, grey values
   // AdjustmentOptions::background_below / robust_k / reject_k: pixels dropped as
@@ -132,7 +134,8 @@ class WindowAdjustment {
   bool Stalled(const std::vector<IterationReport>& iterations) const;
   void BuildTopologyTables();
   void BuildPattern();
-  long long CastAll(std::vector<std::vector<PixelObservation>>* casts);
+  // Returns the observations; *rays: how many pixel rays were cast.
+  long long CastAll(std::vector<std::vector<PixelObservation>>* casts, IterationReport* it);
   void InitialiseGrey(const std::vector<std::vector<PixelObservation>>& casts);
   // Drops background pixels (AdjustmentOptions::background_below); returns how many.
   long long DropBackground(std::vector<std::vector<PixelObservation>>* casts) const;

@@ -80,6 +80,8 @@ TriangleScene::TriangleScene(EmbreeDevice& device,
 
 TriangleScene::~TriangleScene() {
   if (occluder_ != nullptr) rtcReleaseGeometry(occluder_);
+  if (occluder_mesh_ != nullptr) rtcReleaseGeometry(occluder_mesh_);
+  if (occluder_scene_ != nullptr) rtcReleaseScene(occluder_scene_);
   rtcReleaseGeometry(geometry_);
   rtcReleaseScene(scene_);
 }
@@ -108,12 +110,15 @@ void TriangleScene::AddOccluders(const std::vector<Eigen::Vector3d>& vertices,
                                  const std::vector<Eigen::Vector3i>& triangles) {
   if (occluder_ != nullptr) throw std::logic_error("TriangleScene: occluders already added");
   if (triangles.empty()) return;
-  occluder_ = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
+  occluder_scene_ = rtcNewScene(device_.get());
+  rtcSetSceneFlags(occluder_scene_, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(occluder_scene_, RTC_BUILD_QUALITY_MEDIUM);
+  occluder_mesh_ = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
   auto* vertex_buffer = static_cast<float*>(rtcSetNewGeometryBuffer(
-      occluder_, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 4 * sizeof(float),
+      occluder_mesh_, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 4 * sizeof(float),
       vertices.size()));
   auto* index_buffer = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-      occluder_, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+      occluder_mesh_, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
       triangles.size()));
   device_.Check();
   for (size_t i = 0; i < vertices.size(); ++i) {
@@ -130,6 +135,14 @@ void TriangleScene::AddOccluders(const std::vector<Eigen::Vector3d>& vertices,
       index_buffer[3 * i + k] = static_cast<unsigned>(index);
     }
   }
+  rtcCommitGeometry(occluder_mesh_);
+  rtcAttachGeometry(occluder_scene_, occluder_mesh_);
+  rtcCommitScene(occluder_scene_);
+  occluder_ = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_INSTANCE);
+  rtcSetGeometryInstancedScene(occluder_, occluder_scene_);
+  rtcSetGeometryTimeStepCount(occluder_, 1);
+  const float identity[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};  // 3x4 column-major
+  rtcSetGeometryTransform(occluder_, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, identity);
   rtcCommitGeometry(occluder_);
   if (rtcAttachGeometry(scene_, occluder_) != 1) {
     throw std::logic_error("TriangleScene: occluders did not get geometry id 1");
@@ -161,7 +174,7 @@ RayHit TriangleScene::Intersect(const Eigen::Vector3d& origin,
   RayHit result;
   if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return result;
   result.hit = true;
-  result.geom_id = rayhit.hit.geomID;
+  result.geom_id = rayhit.hit.instID[0] != RTC_INVALID_GEOMETRY_ID ? rayhit.hit.instID[0] : rayhit.hit.geomID;
   result.prim_id = rayhit.hit.primID;
   result.u = rayhit.hit.u;
   result.v = rayhit.hit.v;

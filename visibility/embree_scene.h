@@ -68,7 +68,7 @@ inline void IntersectCoherent16(const int* valid, RTCScene scene, RTCRayHit16* p
 // (u, v) are Embree's barycentrics: point = (1-u-v) V0 + u V1 + v V2.
 struct RayHit {
   bool hit = false;
-  unsigned geom_id = 0;  // 0: the scene's own triangles, 1: occluders (AddOccluders)
+  unsigned geom_id = 0;  // 0: the scene's own triangles, 1: occluders (AddOccluders; their instance id)
   unsigned prim_id = 0;
   float u = 0, v = 0;
   float distance = 0;           // ray parameter t (the direction is not normalised)
@@ -94,9 +94,13 @@ class TriangleScene {
   // one window); rebuild after large moves.
   void UpdateVertices(const std::vector<Eigen::Vector3d>& vertices, bool refit = false);
 
-  // Adds a second, static triangle set (Embree geometry id 1) that stops rays but is
-  // not part of the surface: the rest of the surface around a window, which hides
-  // parts of the window from oblique views. Once per scene, before any query.
+  // Adds a second, static triangle set that stops rays but is not part of the
+  // surface: the rest of the surface around a window, which hides parts of the window
+  // from oblique views. Once per scene, before any query. The occluders live in their
+  // own static Embree scene (BVH built once), instanced into this one as geometry id 1
+  // (identity transform): recommitting this scene after UpdateVertices then refits or
+  // rebuilds only the surface, not the occluders. A ray stopped by them has
+  // hit.instID[0] == 1 (hit.geomID is 0, the geometry inside the instanced scene).
   void AddOccluders(const std::vector<Eigen::Vector3d>& vertices,
                     const std::vector<Eigen::Vector3i>& triangles);
   bool HasOccluders() const { return occluder_ != nullptr; }
@@ -113,7 +117,9 @@ class TriangleScene {
   EmbreeDevice& device_;
   RTCScene scene_ = nullptr;
   RTCGeometry geometry_ = nullptr;
-  RTCGeometry occluder_ = nullptr;
+  RTCScene occluder_scene_ = nullptr;
+  RTCGeometry occluder_mesh_ = nullptr;
+  RTCGeometry occluder_ = nullptr;  // the instance of occluder_scene_
   float* vertex_buffer_ = nullptr;  // owned by Embree, 3 floats + 1 pad per vertex
   size_t num_vertices_ = 0;
   size_t num_triangles_ = 0;

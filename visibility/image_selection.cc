@@ -109,6 +109,46 @@ std::vector<ImageCast> CastWindow(const SurfaceScene& scene, const ImageBlock& b
   return casts;
 }
 
+std::vector<PixelRect> ProjectedBlocks(const std::vector<Eigen::AlignedBox3d>& boxes,
+                                       const Camera& camera, const Rigid3d& cam_from_world,
+                                       const PixelRect& clip_in, int block_size, int margin_px) {
+  if (block_size < 1) throw std::invalid_argument("ProjectedBlocks: block_size must be >= 1");
+  std::vector<PixelRect> blocks;
+  const PixelRect clip = clip_in.Intersection(PixelRect::Full(camera));
+  if (clip.Empty()) return blocks;
+  const int bx0 = clip.x0 / block_size, by0 = clip.y0 / block_size;
+  const int bx1 = (clip.x1 + block_size - 1) / block_size, by1 = (clip.y1 + block_size - 1) / block_size;
+  const int nx = bx1 - bx0, ny = by1 - by0;
+  std::vector<char> on(static_cast<size_t>(nx) * ny, 0);
+  auto mark = [&](const PixelRect& r_in) {
+    const PixelRect r = r_in.Intersection(clip);
+    if (r.Empty()) return;
+    for (int by = r.y0 / block_size; by <= (r.y1 - 1) / block_size; ++by) {
+      for (int bx = r.x0 / block_size; bx <= (r.x1 - 1) / block_size; ++bx) {
+        on[static_cast<size_t>(by - by0) * nx + (bx - bx0)] = 1;
+      }
+    }
+  };
+  if (camera.HasDistortion()) {
+    Eigen::AlignedBox3d all;
+    for (const auto& box : boxes) all.extend(box);
+    if (const auto rect = ProjectBox(all, camera, cam_from_world, margin_px)) mark(*rect);
+  } else {
+    for (const auto& box : boxes) {
+      if (const auto rect = ProjectBox(box, camera, cam_from_world, margin_px)) mark(*rect);
+    }
+  }
+  for (int by = 0; by < ny; ++by) {
+    for (int bx = 0; bx < nx; ++bx) {
+      if (!on[static_cast<size_t>(by) * nx + bx]) continue;
+      const PixelRect block{(bx0 + bx) * block_size, (by0 + by) * block_size, (bx0 + bx + 1) * block_size,
+                            (by0 + by + 1) * block_size};
+      blocks.push_back(block.Intersection(clip));
+    }
+  }
+  return blocks;
+}
+
 Eigen::AlignedBox3d FacesBoundingBox(const Tessellation& tessellation,
                                      const std::vector<int>& faces) {
   Eigen::AlignedBox3d box;

@@ -27,6 +27,18 @@ namespace facets {
 std::optional<PixelRect> ProjectBox(const Eigen::AlignedBox3d& box, const Camera& camera,
                                     const Rigid3d& cam_from_world, int margin_px = 2);
 
+// The block_size x block_size pixel blocks (aligned to multiples of block_size, clipped
+// to `clip`) onto which at least one of the boxes projects (ProjectBox with margin_px),
+// row-major. With the boxes of a window's faces (FaceBoxes in
+// visibility/occluder_selection.h) every pixel whose ray can hit the window lies in a
+// returned block; casting only those skips the parts of the window's rectangle that
+// only the surroundings cover (an oblique view's rectangle of a tall window is mostly
+// empty). With lens distortion (ProjectBox samples every box border, too slow per face)
+// the union of the boxes is projected instead: all blocks of that rectangle.
+std::vector<PixelRect> ProjectedBlocks(const std::vector<Eigen::AlignedBox3d>& boxes,
+                                       const Camera& camera, const Rigid3d& cam_from_world,
+                                       const PixelRect& clip, int block_size = 8, int margin_px = 1);
+
 struct ImageSelection {
   int image_index = 0;  // into ImageBlock::images
   int image_id = 0;

@@ -6,10 +6,12 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <set>
 
+#include "visibility/image_selection.h"
 #include "visibility/pixel_cast.h"
 #include "visibility/surface_scene.h"
 #include "visibility/test_util.h"
@@ -98,6 +100,60 @@ TEST(OccluderSelection, EveryFaceThatHidesTheWindowIsSelected) {
   EXPECT_GT(hidden, 1000);
   EXPECT_EQ(missing, 0);
   EXPECT_LT(selected.size(), static_cast<size_t>(num_faces) / 2);
+}
+
+// ProjectedBlocks (visibility/image_selection.h) with the boxes of a window's faces:
+// every pixel whose ray hits the window lies in a selected 8x8 block, and casting the
+// blocks gives exactly the observations of casting the window's whole rectangle.
+TEST(ProjectedBlocks, EveryPixelThatHitsTheWindowIsInABlock) {
+  // A wavy 20 m x 20 m window with a 6 m tower on it, seen from oblique views.
+  FlatMesh window;
+  AppendGridForTesting(-10, -10, 10, 10, 10, 10,
+                       [](double x, double y) { return 0.8 * std::sin(0.3 * x) + 0.5 * std::cos(0.4 * y); }, &window);
+  AppendBoxForTesting({-2, -2, -1}, {2, 2, 6}, false, &window);
+  const Tessellation tess = TessellateFlatForTesting(window);
+  const SurfaceScene scene(tess, /*refittable=*/false);
+  const std::vector<Eigen::AlignedBox3d> boxes = FaceBoxes(tess);
+  Eigen::AlignedBox3d all;
+  for (const auto& b : boxes) all.extend(b);
+  const Camera camera = Camera::Create(CameraModel::kPinhole, 500, 500, 320, 240, 640, 480);
+  long long hits = 0, outside = 0, blocks_total = 0, blocks_rect = 0;
+  for (const Rigid3d& pose : {LookAtPose({0, 0, 40}, {0, 0, 0}), LookAtPose({-35, 5, 25}, {0, 0, 0}),
+                              LookAtPose({20, -30, 20}, {3, 0, 0}), LookAtPose({10, 25, 15}, {0, 0, 2})}) {
+    const auto rect = ProjectBox(all, camera, pose);
+    ASSERT_TRUE(rect.has_value());
+    const std::vector<PixelRect> blocks = ProjectedBlocks(boxes, camera, pose, *rect);
+    blocks_total += static_cast<long long>(blocks.size());
+    blocks_rect += ((rect->x1 + 7) / 8 - rect->x0 / 8) * ((rect->y1 + 7) / 8 - rect->y0 / 8);
+    std::vector<char> in_block(static_cast<size_t>(camera.width) * camera.height, 0);
+    for (const PixelRect& b : blocks) {
+      for (int y = b.y0; y < b.y1; ++y)
+        for (int x = b.x0; x < b.x1; ++x) in_block[static_cast<size_t>(y) * camera.width + x] = 1;
+    }
+    CastOptions options;
+    options.keep_invalid = true;
+    const CastResult full = CastPixels(scene, camera, pose, PixelRect::Full(camera), options);
+    for (const PixelObservation& obs : full.observations) {
+      if (obs.status == RayStatus::kMiss) continue;
+      ++hits;
+      outside += !in_block[static_cast<size_t>(obs.y) * camera.width + obs.x];
+    }
+    // Valid observations: the same, pixel for pixel (both sorted by pixel).
+    const CastResult a = CastPixels(scene, camera, pose, *rect);
+    const CastResult b = CastPixels(scene, camera, pose, blocks);
+    auto key = [&](const PixelObservation& o) { return static_cast<long long>(o.y) * camera.width + o.x; };
+    std::vector<std::pair<long long, int>> ka, kb;
+    for (const auto& o : a.observations) ka.emplace_back(key(o), o.facet);
+    for (const auto& o : b.observations) kb.emplace_back(key(o), o.facet);
+    std::sort(ka.begin(), ka.end());
+    std::sort(kb.begin(), kb.end());
+    EXPECT_EQ(ka, kb);
+  }
+  std::cout << "projected blocks: " << blocks_total << " of " << blocks_rect << " blocks of the window rectangles, "
+            << hits << " pixels hit the window, " << outside << " outside the blocks\n";
+  EXPECT_GT(hits, 100000);
+  EXPECT_EQ(outside, 0);
+  EXPECT_LT(blocks_total, blocks_rect);
 }
 
 // Without views nothing can hide anything; a box behind every camera neither.

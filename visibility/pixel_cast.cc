@@ -72,7 +72,8 @@ int CastPacket(RTCScene scene, const PixelRays& rays, const int* xs, const int* 
       if (options.keep_invalid) out[written++] = obs;
       continue;
     }
-    if (packet.hit.geomID[i] != 0) {
+    // Occluders are an instance (TriangleScene::AddOccluders): hit.instID set.
+    if (packet.hit.instID[0][i] != RTC_INVALID_GEOMETRY_ID || packet.hit.geomID[i] != 0) {
       obs.status = RayStatus::kOccluded;
       ++stats->occluded;
       if (options.keep_invalid) out[written++] = obs;
@@ -176,24 +177,14 @@ Eigen::Vector3d PixelRays::Direction(int x, int y) const {
   return direction.normalized();
 }
 
-CastResult CastPixels(const SurfaceScene& scene, const Camera& camera,
-                      const Rigid3d& cam_from_world, const PixelRect& rect_in,
-                      const CastOptions& options) {
-  options.Check();
-  const PixelRays rays(camera, cam_from_world);
-  const PixelRect rect = rect_in.Intersection(PixelRect::Full(camera));
+namespace {
+
+// First hits for the pixels of num_tiles rectangles tile_rect(t) (each inside the
+// image), in tile order, 4x4 packets within a tile, tiles spread over TBB.
+template <typename TileRect>
+CastResult CastTiles(const SurfaceScene& scene, const PixelRays& rays, int num_tiles,
+                     const TileRect& tile_rect, const CastOptions& options) {
   CastResult result;
-  if (rect.Empty()) return result;
-  const int ts = options.tile_size;
-  const int tiles_x = (rect.Width() + ts - 1) / ts;
-  const int tiles_y = (rect.Height() + ts - 1) / ts;
-  const int num_tiles = tiles_x * tiles_y;
-  auto tile_rect = [&](int t) {
-    const int tx = t % tiles_x, ty = t / tiles_x;
-    return PixelRect{rect.x0 + tx * ts, rect.y0 + ty * ts,
-                     std::min(rect.x1, rect.x0 + (tx + 1) * ts),
-                     std::min(rect.y1, rect.y0 + (ty + 1) * ts)};
-  };
   std::vector<long long> offsets(num_tiles), counts(num_tiles, 0);
   long long total = 0;
   for (int t = 0; t < num_tiles; ++t) {
@@ -231,6 +222,42 @@ CastResult CastPixels(const SurfaceScene& scene, const Camera& camera,
   Compact(offsets, counts, &result.observations);
   for (const CastStats& s : tile_stats) Accumulate(s, &result.stats);
   return result;
+}
+
+}  // namespace
+
+CastResult CastPixels(const SurfaceScene& scene, const Camera& camera,
+                      const Rigid3d& cam_from_world, const PixelRect& rect_in,
+                      const CastOptions& options) {
+  options.Check();
+  const PixelRays rays(camera, cam_from_world);
+  const PixelRect rect = rect_in.Intersection(PixelRect::Full(camera));
+  if (rect.Empty()) return {};
+  const int ts = options.tile_size;
+  const int tiles_x = (rect.Width() + ts - 1) / ts;
+  const int tiles_y = (rect.Height() + ts - 1) / ts;
+  auto tile_rect = [&](int t) {
+    const int tx = t % tiles_x, ty = t / tiles_x;
+    return PixelRect{rect.x0 + tx * ts, rect.y0 + ty * ts,
+                     std::min(rect.x1, rect.x0 + (tx + 1) * ts),
+                     std::min(rect.y1, rect.y0 + (ty + 1) * ts)};
+  };
+  return CastTiles(scene, rays, tiles_x * tiles_y, tile_rect, options);
+}
+
+CastResult CastPixels(const SurfaceScene& scene, const Camera& camera,
+                      const Rigid3d& cam_from_world, const std::vector<PixelRect>& rects_in,
+                      const CastOptions& options) {
+  options.Check();
+  const PixelRays rays(camera, cam_from_world);
+  const PixelRect full = PixelRect::Full(camera);
+  std::vector<PixelRect> rects;
+  rects.reserve(rects_in.size());
+  for (const PixelRect& r : rects_in) {
+    const PixelRect clipped = r.Intersection(full);
+    if (!clipped.Empty()) rects.push_back(clipped);
+  }
+  return CastTiles(scene, rays, static_cast<int>(rects.size()), [&](int t) { return rects[t]; }, options);
 }
 
 CastResult CastPixels(const SurfaceScene& scene, const Camera& camera,

@@ -118,6 +118,12 @@ class PixelRays {
 CastResult CastPixels(const SurfaceScene& scene, const Camera& camera,
                       const Rigid3d& cam_from_world, const PixelRect& rect,
                       const CastOptions& options = {});
+// First hits for the pixels of a list of rectangles (each clipped to the image;
+// e.g. the 8x8 blocks of ProjectedBlocks in visibility/image_selection.h), in
+// rectangle order; the rectangles should not overlap (a pixel would be cast twice).
+CastResult CastPixels(const SurfaceScene& scene, const Camera& camera,
+                      const Rigid3d& cam_from_world, const std::vector<PixelRect>& rects,
+                      const CastOptions& options = {});
 // First hits for a list of pixel indices (outside-image pixels are skipped).
 CastResult CastPixels(const SurfaceScene& scene, const Camera& camera,
                       const Rigid3d& cam_from_world,
