@@ -51,6 +51,8 @@ struct ReconstructArgs {
   std::string start_mesh;
   std::string closed_shape = ClosedStartOptions().shape;
   double closed_lifting_range = ClosedStartOptions().lifting_range;
+  VisualHullOptions visual_hull;
+  bool no_hull_clamp = false;
   double background_below = AdjustmentOptions().background_below;
   // None: 2 and 5 for closed starts (pixels past a silhouette see the background),
   // off otherwise.
@@ -133,6 +135,9 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.closed.shape = args.closed_shape;
   options.closed.lifting_steps = args.lifting_steps;
   options.closed.lifting_range = args.closed_lifting_range;
+  options.closed.visual_hull = args.visual_hull;
+  options.closed.hull_clamp = !args.no_hull_clamp;
+  options.closed.write_start = (std::filesystem::path(args.out) / "start.ply").string();
   options.adjustment.background_below = args.background_below;
   const bool closed = options.start_closed || !args.start_mesh.empty();
   options.adjustment.robust_k = args.robust.value_or(closed ? kClosedRobustK : 0.0);
@@ -241,7 +246,15 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--roi", args->roi, "region of interest: xmin ymin zmin xmax ymax zmax (global)")->expected(6);
   sub->add_option("--start-mesh", args->start_mesh, "closed (or any) start mesh, PLY or OBJ, local coordinates");
   sub->add_option("--closed-shape", args->closed_shape,
-                  "automatic closed start: ellipsoid | hull (convex hull of the tie points)")->capture_default_str();
+                  "automatic closed start: ellipsoid | hull (convex hull of the tie points) | visual-hull (carved to the silhouettes)")->capture_default_str();
+  sub->add_option("--hull-background", args->visual_hull.foreground.background_max,
+                  "visual-hull start: grey values <= this are background")->capture_default_str();
+  sub->add_option("--hull-voxel", args->visual_hull.voxel_size,
+                  "visual-hull start: voxel edge (m; 0 = the box's longest side / 200)")->capture_default_str();
+  sub->add_option("--hull-misses", args->visual_hull.allowed_misses,
+                  "visual-hull start: images that may see background at a kept voxel")->capture_default_str();
+  sub->add_flag("--no-hull-clamp", args->no_hull_clamp,
+                "visual-hull start: let the surface leave the hull (no silhouette constraint)");
   sub->add_option("--closed-lifting-range", args->closed_lifting_range,
                   "object lifting of a closed start: scale factors over 1 +- range/2")->capture_default_str();
   sub->add_option("--background-below", args->background_below,

@@ -213,6 +213,8 @@ std::string ReconstructionReport::Json() const {
     l["faces"] = level.faces;
     l["seconds"] = level.seconds;
     l["folded_faces"] = level.folded_faces;
+    l["hull_clamped"] = level.hull_clamped;
+    l["hull_unresolved"] = level.hull_unresolved;
     l["self_intersections"] = level.self_intersections;
     l["fold_limited"] = level.fold_limited;
     l["relaxed_unseen"] = level.relaxed;
@@ -472,6 +474,20 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     }
     // Not after the finest level's last adjustment: the products use its tessellation.
     if (level > 0) relax_unseen();
+    // Silhouette constraint of a visual-hull start: the surface may not leave the hull.
+    if (closed && closed->visual_hull && options.closed.hull_clamp) {
+      const std::vector<bool> creases = DetectCreaseEdges(mesh, options.adjustment.crease_angle_deg);
+      level_report.hull_clamped = ClampToVisualHull(
+          *closed, options.closed.hull_clamp_edges * edge_length(level), &mesh, &level_report.hull_unresolved);
+      if (level == 0 && level_report.hull_clamped > 0) {
+        // Same topology and creases: only the products' surface points move.
+        UpdateTessellationPoints(BuildPatches(mesh, ComputeCornerNormals(mesh, creases)),
+                                 &adjusted.tessellation);
+      }
+      say("  level " + std::to_string(level) + ": " + std::to_string(level_report.hull_clamped) +
+          " vertices pulled inside the visual hull, " + std::to_string(level_report.hull_unresolved) +
+          " outside by more than " + std::to_string(options.closed.hull_clamp_edges) + " edges");
+    }
     level_report.vertices = static_cast<int>(mesh.n_vertices());
     level_report.faces = static_cast<int>(mesh.n_faces());
     level_report.folded_faces = CountFoldedFaces(mesh);

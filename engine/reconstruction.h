@@ -133,6 +133,8 @@ struct LevelReport {
   int self_intersections = 0;
   int fold_limited = 0;
   int relaxed = 0;  // unseen vertices relaxed (ReconstructionOptions::relax_unseen), summed
+  int hull_clamped = 0;     // vertices pulled inside the visual hull (ClosedStartOptions::hull_clamp)
+  int hull_unresolved = 0;  // outside it and not pulled in
   double seconds = 0.0;
 };
 

@@ -211,9 +211,12 @@ EllipsoidFit FitStartEllipsoid(const std::vector<Eigen::Vector3d>& points,
 }
 
 void ClosedStartOptions::Check() const {
-  if (shape != "ellipsoid" && shape != "hull") {
-    throw std::invalid_argument("closed start: shape must be ellipsoid or hull, not '" + shape + "'");
+  if (shape != "ellipsoid" && shape != "hull" && shape != "visual-hull") {
+    throw std::invalid_argument("closed start: shape must be ellipsoid, hull or visual-hull, not '" +
+                                shape + "'");
   }
+  visual_hull.Check();
+  if (!(visual_hull_grow >= 0.0)) throw std::invalid_argument("closed start: visual_hull_grow must be >= 0");
   if (!(hull_inflate >= 0.0 && hull_inflate < 1.0)) {
     throw std::invalid_argument("closed start: hull_inflate must lie in [0, 1)");
   }
@@ -225,7 +228,11 @@ void ClosedStartOptions::Check() const {
 
 std::string ClosedStart::Describe() const {
   std::ostringstream out;
-  if (given) {
+  if (visual_hull) {
+    out << "closed start: visual hull of " << visual_hull->Count() << " voxels of "
+        << visual_hull->voxel << " m (grid " << visual_hull->size.transpose() << "), volume "
+        << visual_hull->Volume() << ", centre " << centre.transpose();
+  } else if (given) {
     out << "closed start from the given mesh: " << given->n_vertices() << " vertices, "
         << given->n_faces() << " faces, centre " << centre.transpose();
   } else if (fit) {
@@ -248,6 +255,18 @@ ClosedStart PrepareClosedStart(const ImageBlock& block, const RegionOfInterest& 
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (const auto& p : data.vertices) sum += p;
     start.centre = sum / static_cast<double>(data.vertices.size());
+    return start;
+  }
+  if (options.shape == "visual-hull") {
+    const Eigen::Vector3d grow = options.visual_hull_grow * (roi.max - roi.min);
+    const Eigen::AlignedBox3d box(roi.min - grow, roi.max + grow);
+    start.visual_hull = CarveVisualHull(block, box, options.visual_hull);
+    if (start.visual_hull->Count() == 0) {
+      throw std::runtime_error(
+          "closed start: no voxel of the region projects into the foreground of every image "
+          "(check the background threshold)");
+    }
+    start.centre = start.visual_hull->Centroid();
     return start;
   }
   std::vector<Eigen::Vector3d> inside, all;
@@ -278,7 +297,16 @@ TinMesh MakeClosedStartMesh(const ClosedStart& start, const ClosedStartOptions& 
                             const std::function<void(const std::string&)>& say) {
   options.Check();
   TinMesh mesh;
-  if (start.given) {
+  if (start.visual_hull) {
+    std::vector<Eigen::Vector3d> points;
+    std::vector<Eigen::Vector3i> triangles;
+    MeshVisualHull(*start.visual_hull, edge_length, &points, &triangles);
+    mesh = TinFromTriangles(points, triangles, "visual hull");
+    QualityOptions quality;
+    quality.target_edge_length = edge_length;
+    QualityPass(&mesh, quality);
+    UpdateVertexNormals(&mesh);
+  } else if (start.given) {
     mesh = *start.given;
     QualityOptions quality;
     quality.target_edge_length = edge_length;
@@ -293,7 +321,15 @@ TinMesh MakeClosedStartMesh(const ClosedStart& start, const ClosedStartOptions& 
   } else {
     mesh = MakeEllipsoidMesh(start.fit->ellipsoid, edge_length);
   }
-  if (options.lifting_steps == 0) return mesh;
+  auto finish = [&](TinMesh result) {
+    if (!options.write_start.empty()) {
+      MeshData data;
+      TinPointsAndTriangles(result, &data.vertices, &data.faces);
+      WritePly(options.write_start, data);
+    }
+    return result;
+  };
+  if (options.lifting_steps == 0) return finish(std::move(mesh));
 
   // Object lifting along the normals: one iteration per scale factor.
   struct Trial {
@@ -356,7 +392,52 @@ TinMesh MakeClosedStartMesh(const ClosedStart& start, const ClosedStartOptions& 
   if (best < 0) throw std::runtime_error("object lifting: no scale of the closed start is seen by any image");
   const double scale = std::max(0.1, tried[best].scale + tried[best].scale_correction);
   if (say) say("  lifting: closed start scaled by " + std::to_string(scale));
-  return Scaled(mesh, start.centre, scale);
+  return finish(Scaled(mesh, start.centre, scale));
+}
+
+int ClampToVisualHull(const ClosedStart& start, double max_move, TinMesh* mesh, int* unresolved) {
+  if (unresolved) *unresolved = 0;
+  if (!start.visual_hull) return 0;
+  const HullOccupancy occupancy = SmoothHullOccupancy(*start.visual_hull);
+  std::vector<Eigen::Vector3d> points, normals;
+  for (auto vh : mesh->vertices()) {
+    points.push_back(ToEigen(mesh->point(vh)));
+    normals.push_back(ToEigen(mesh->normal(vh)));
+  }
+  const std::vector<Eigen::Vector3d> before = points;
+  int stuck = 0;
+  PullInsideHull(occupancy, normals, max_move, &points, &stuck);
+  // A spike farther out than max_move: to the centroid of its ring (mostly inside by
+  // now), then pulled in from there; a few rounds for spikes of several vertices.
+  for (int round = 0; round < 3 && stuck > 0; ++round) {
+    std::vector<Eigen::Vector3d> spikes, directions;
+    std::vector<int> index;
+    for (auto vh : mesh->vertices()) {
+      Eigen::Vector3d& p = points[vh.idx()];
+      if (occupancy.Inside(p)) continue;
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      int n = 0;
+      for (auto nb : mesh->vv_range(vh)) {
+        sum += points[nb.idx()];
+        ++n;
+      }
+      if (n == 0) continue;
+      p = sum / n;
+      spikes.push_back(p);
+      directions.push_back(normals[vh.idx()]);
+      index.push_back(vh.idx());
+    }
+    PullInsideHull(occupancy, directions, max_move, &spikes, &stuck);
+    for (size_t k = 0; k < index.size(); ++k) points[index[k]] = spikes[k];
+  }
+  if (unresolved) *unresolved = stuck;
+  int moved = 0;
+  for (size_t k = 0; k < points.size(); ++k) moved += points[k] != before[k] ? 1 : 0;
+  if (moved > 0) {
+    for (auto vh : mesh->vertices()) mesh->set_point(vh, ToOpenMesh(points[vh.idx()]));
+    UpdateVertexNormals(mesh);
+  }
+  return moved;
 }
 
 }  // namespace facets

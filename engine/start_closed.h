@@ -12,6 +12,10 @@
 //   edge length (mesh/closed_surface.h).
 // - Or the convex hull of those inlier tie points, grown a little (ClosedStartOptions::
 //   shape "hull"), for objects far from an ellipsoid (a temple, a box).
+// - Or the visual hull (shape "visual-hull", visibility/visual_hull.h): the region of
+//   interest grown by visual_hull_grow on every side, carved to the images'
+//   background-thresholded silhouettes, meshed with the coarsest level's edge length:
+//   a start that projects onto the object's outline in every image.
 // - Object lifting along the normals: the start scaled about its centre over a range
 //   of factors, one iteration each on the coarsest level; chosen by the sign change of
 //   the mean displacement (outward -> inward) and, among those, the smallest sigma0.
@@ -27,6 +31,7 @@
 #include "io/image_block.h"
 #include "mesh/closed_surface.h"
 #include "mesh/tin.h"
+#include "visibility/visual_hull.h"
 
 namespace facets {
 
@@ -57,6 +62,18 @@ struct ClosedStartOptions {
   // fit's inlier tie points, grown by hull_inflate, for boxy objects).
   std::string shape = "ellipsoid";
   double hull_inflate = 0.05;
+  // shape "visual-hull": silhouettes, voxel size, misses; the carved box is the region
+  // of interest grown by this share of its size on every side.
+  VisualHullOptions visual_hull;
+  double visual_hull_grow = 0.25;
+  // Visual-hull start: after each level's adjustment, vertices outside the hull are
+  // moved inward along their normals onto it (at most hull_clamp_edges edge lengths):
+  // a background pixel of any image says the object is not there, but it gives no
+  // observation, so nothing else stops the surface from swelling past the silhouettes.
+  bool hull_clamp = true;
+  double hull_clamp_edges = 2.0;
+  // When not empty, the start mesh (after object lifting) is written here as PLY.
+  std::string write_start;
   // Object lifting: scale factors over 1 +- range / 2 in `steps` steps; 0 steps = off.
   int lifting_steps = 0;
   double lifting_range = 0.4;
@@ -70,6 +87,7 @@ struct ClosedStart {
   std::optional<EllipsoidFit> fit;    // automatic start
   std::optional<TinMesh> given;       // start mesh file
   std::vector<Eigen::Vector3d> hull_points;  // shape "hull": the fit's inliers
+  std::optional<VisualHullGrid> visual_hull;  // shape "visual-hull"
   std::string Describe() const;
 };
 
@@ -87,5 +105,10 @@ TinMesh MakeClosedStartMesh(const ClosedStart& start, const ClosedStartOptions& 
                             double edge_length, const std::vector<LevelImage>& images,
                             const AdjustmentOptions& one, std::vector<LiftingTrial>* trials,
                             const std::function<void(const std::string&)>& say);
+
+// The silhouette constraint (ClosedStartOptions::hull_clamp) on `mesh` (vertex normals
+// updated); nothing when the start is no visual hull. Returns the vertices moved;
+// *unresolved: vertices outside with no inside position within max_move.
+int ClampToVisualHull(const ClosedStart& start, double max_move, TinMesh* mesh, int* unresolved);
 
 }  // namespace facets

@@ -1,0 +1,92 @@
+// Visual hull (issue 9): the volume whose every point projects into the object's
+// silhouette (visibility/silhouette.h) in every image, carved in a voxel grid, and its
+// boundary as a closed triangle mesh: a start for closed objects that, unlike an
+// ellipsoid or the tie points' convex hull, already has the object's outline in every
+// image (and its see-through gaps, where the images show them).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "io/camera.h"
+#include "io/image_block.h"
+#include "io/rigid3d.h"
+#include "visibility/silhouette.h"
+
+namespace facets {
+
+struct VisualHullOptions {
+  ForegroundOptions foreground = DefaultForeground();
+  // Voxel edge (object units); 0 = the box's longest side / 200.
+  double voxel_size = 0.0;
+  // A voxel stays when at most this many images see background at its centre (a dark,
+  // shaded part of the object under the threshold in one image does not carve it).
+  int allowed_misses = 0;
+  void Check() const;  // throws std::invalid_argument naming the option
+
+  // Background at or below grey 15, a 1-pixel opening, the largest component, enclosed
+  // holes under 500 pixels filled.
+  static ForegroundOptions DefaultForeground();
+};
+
+struct VisualHullGrid {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // centre of voxel (0, 0, 0)
+  double voxel = 0.0;
+  Eigen::Vector3i size = Eigen::Vector3i::Zero();
+  std::vector<uint8_t> inside;  // x fastest
+
+  size_t Index(int i, int j, int k) const {
+    return (static_cast<size_t>(k) * size.y() + j) * size.x() + i;
+  }
+  bool Inside(int i, int j, int k) const {
+    return i >= 0 && j >= 0 && k >= 0 && i < size.x() && j < size.y() && k < size.z() &&
+           inside[Index(i, j, k)] != 0;
+  }
+  Eigen::Vector3d Centre(int i, int j, int k) const {
+    return origin + voxel * Eigen::Vector3d(i, j, k);
+  }
+  long long Count() const;
+  Eigen::Vector3d Centroid() const;  // of the inside voxels
+  double Volume() const { return static_cast<double>(Count()) * voxel * voxel * voxel; }
+};
+
+// Carves the grid over `box` with the given foreground masks (one per camera/pose, the
+// camera's size). A voxel centre projecting outside an image or behind it counts as
+// background there. Only the largest 6-connected inside component is kept.
+VisualHullGrid CarveVisualHull(const std::vector<Camera>& cameras,
+                               const std::vector<Rigid3d>& cam_from_world,
+                               const std::vector<PixelMask>& masks,
+                               const Eigen::AlignedBox3d& box, const VisualHullOptions& options);
+
+// The same with the masks of the block's image files (errors name the file).
+VisualHullGrid CarveVisualHull(const ImageBlock& block, const Eigen::AlignedBox3d& box,
+                               const VisualHullOptions& options);
+
+// The occupancy the mesh follows: the grid box-blurred 3x3x3, trilinear between voxel
+// centres, 0 outside the grid; a point is inside the hull where it exceeds 1/2.
+struct HullOccupancy {
+  const VisualHullGrid* grid = nullptr;
+  std::vector<float> smooth;
+  double At(const Eigen::Vector3d& p) const;
+  bool Inside(const Eigen::Vector3d& p) const { return At(p) > 0.5; }
+};
+HullOccupancy SmoothHullOccupancy(const VisualHullGrid& grid);
+
+// Silhouette constraint: every point outside the hull is moved against its (outward)
+// direction to the first position inside, searched in steps of a quarter voxel up to
+// max_move and refined by bisection. Returns the points moved; *unresolved (optional)
+// counts points outside with no inside position within max_move (left where they are).
+int PullInsideHull(const HullOccupancy& occupancy, const std::vector<Eigen::Vector3d>& directions,
+                   double max_move, std::vector<Eigen::Vector3d>* points, int* unresolved = nullptr);
+
+// Closed, manifold triangle mesh of the grid's boundary (CGAL surface mesher on the
+// trilinear occupancy, level 1/2), triangles of about edge_length, normals outward.
+// Throws std::runtime_error when the grid is empty or the mesher finds no surface.
+void MeshVisualHull(const VisualHullGrid& grid, double edge_length,
+                    std::vector<Eigen::Vector3d>* points, std::vector<Eigen::Vector3i>* triangles);
+
+}  // namespace facets
