@@ -218,6 +218,8 @@ std::string ReconstructionReport::Json() const {
     l["self_intersections"] = level.self_intersections;
     l["fold_limited"] = level.fold_limited;
     l["relaxed_unseen"] = level.relaxed;
+    l["crossing_pairs_untangled"] = level.crossing_untangled;
+    l["untangle_moved_vertices"] = level.untangle_moved;
     for (const WallPass& pass : level.wall_passes) {
       l["wall_passes"].push_back({{"splits", pass.splits}, {"flips", pass.flips},
                                   {"faces", pass.faces}, {"sigma0", pass.sigma0}});
@@ -487,6 +489,24 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       say("  level " + std::to_string(level) + ": " + std::to_string(level_report.hull_clamped) +
           " vertices pulled inside the visual hull, " + std::to_string(level_report.hull_unresolved) +
           " outside by more than " + std::to_string(options.closed.hull_clamp_edges) + " edges");
+    }
+    if (options.untangle) {
+      const UntangleReport untangled = UntangleSelfIntersections(&mesh);
+      if (untangled.pairs_before > 0) {
+        UpdateVertexNormals(&mesh);
+        level_report.crossing_untangled = untangled.pairs_before;
+        level_report.untangle_moved = untangled.vertices_moved;
+        if (level == 0) {
+          // Same topology: only the products' surface points move.
+          const std::vector<bool> creases = DetectCreaseEdges(mesh, options.adjustment.crease_angle_deg);
+          UpdateTessellationPoints(BuildPatches(mesh, ComputeCornerNormals(mesh, creases)),
+                                   &adjusted.tessellation);
+        }
+        say("  level " + std::to_string(level) + ": " + std::to_string(untangled.pairs_before) +
+            " crossing triangle pairs untangled in " + std::to_string(untangled.rounds) + " rounds (" +
+            std::to_string(untangled.vertices_moved) + " vertices moved, " +
+            std::to_string(untangled.pairs_after) + " pairs left)");
+      }
     }
     level_report.vertices = static_cast<int>(mesh.n_vertices());
     level_report.faces = static_cast<int>(mesh.n_faces());

@@ -86,6 +86,10 @@ struct ReconstructionOptions {
   // After each adjustment of a level, vertices no image saw move to the membrane
   // spanned by the seen surface around them (RelaxUnseenVertices, mesh/local_ops.h).
   bool relax_unseen = true;
+  // After each level: triangle pairs that cross (between windows, after splits: the
+  // fold guard only sees one window's step) are untangled by local smoothing of their
+  // corners and rings (UntangleSelfIntersections, mesh/surface_validity.h).
+  bool untangle = true;
   // Called with one line of progress at a time (stage, level, iteration, sigma0).
   std::function<void(const std::string&)> progress;
 
@@ -135,6 +139,8 @@ struct LevelReport {
   int relaxed = 0;  // unseen vertices relaxed (ReconstructionOptions::relax_unseen), summed
   int hull_clamped = 0;     // vertices pulled inside the visual hull (ClosedStartOptions::hull_clamp)
   int hull_unresolved = 0;  // outside it and not pulled in
+  int crossing_untangled = 0;  // crossing pairs before the untangling (ReconstructionOptions::untangle)
+  int untangle_moved = 0;      // vertices it moved
   double seconds = 0.0;
 };
 

@@ -125,4 +125,52 @@ int LimitFoldingSteps(TinMesh* mesh, const std::vector<Eigen::Vector3d>& before,
   return count;
 }
 
+UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds) {
+  UntangleReport report;
+  std::set<std::pair<int, int>> pairs = SelfIntersectingPairs(*mesh, Points(*mesh));
+  report.pairs_before = report.pairs_after = static_cast<int>(pairs.size());
+  std::vector<bool> ever_moved(mesh->n_vertices(), false);
+  for (int round = 1; round <= max_rounds && !pairs.empty(); ++round) {
+    report.rounds = round;
+    std::vector<bool> region(mesh->n_vertices(), false);
+    for (const auto& pair : pairs) {
+      for (int f : {pair.first, pair.second}) {
+        for (auto v : mesh->fv_range(mesh->face_handle(f))) region[v.idx()] = true;
+      }
+    }
+    // A crossing that survived smoothing its own corners needs a wider patch.
+    for (int grow = 1; grow < round; ++grow) {
+      std::vector<bool> wider = region;
+      for (auto v : mesh->vertices()) {
+        if (!region[v.idx()]) continue;
+        for (auto w : mesh->vv_range(v)) wider[w.idx()] = true;
+      }
+      region.swap(wider);
+    }
+    std::vector<int> free;
+    for (auto v : mesh->vertices()) {
+      if (region[v.idx()] && !mesh->is_boundary(v) && mesh->valence(v) > 0) free.push_back(v.idx());
+    }
+    std::vector<Eigen::Vector3d> next(free.size());
+    for (int sweep = 0; sweep < 3; ++sweep) {
+      for (size_t i = 0; i < free.size(); ++i) {
+        const auto vh = mesh->vertex_handle(free[i]);
+        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+        int count = 0;
+        for (auto w : mesh->vv_range(vh)) {
+          mean += ToEigen(mesh->point(w));
+          ++count;
+        }
+        next[i] = 0.5 * (ToEigen(mesh->point(vh)) + mean / count);
+      }
+      for (size_t i = 0; i < free.size(); ++i) mesh->set_point(mesh->vertex_handle(free[i]), ToOpenMesh(next[i]));
+    }
+    for (int v : free) ever_moved[v] = true;
+    pairs = SelfIntersectingPairs(*mesh, Points(*mesh));
+    report.pairs_after = static_cast<int>(pairs.size());
+  }
+  report.vertices_moved = static_cast<int>(std::count(ever_moved.begin(), ever_moved.end(), true));
+  return report;
+}
+
 }  // namespace facets

@@ -27,4 +27,17 @@ int CountSelfIntersections(const TinMesh& mesh);
 // Vertex normals are not updated (the caller does). Returns the vertices limited.
 int LimitFoldingSteps(TinMesh* mesh, const std::vector<Eigen::Vector3d>& before, int halvings = 4);
 
+// Repair of crossings the per-window fold guard cannot see (between windows, after
+// splits): the vertices of crossing triangles, and from round 2 on their rings grown by
+// one per round, move halfway to the mean of their neighbours (three Jacobi sweeps per
+// round), until no pair crosses or `max_rounds` is spent. Boundary vertices stay.
+// Vertex normals are not updated (the caller does). Returns the crossing pairs left.
+struct UntangleReport {
+  int pairs_before = 0;
+  int pairs_after = 0;
+  int rounds = 0;
+  int vertices_moved = 0;  // distinct vertices moved over all rounds
+};
+UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds = 8);
+
 }  // namespace facets

@@ -64,5 +64,37 @@ TEST(SurfaceValidity, UnseenVertexRelaxesToItsRing) {
   EXPECT_NEAR(mesh.point(c)[2], 0.0, 1e-12);
 }
 
+TEST(SurfaceValidity, CrossingTrianglesAreUntangledLocally) {
+  StartGridOptions grid;
+  grid.min = Eigen::Vector2d(0, 0);
+  grid.max = Eigen::Vector2d(8, 8);
+  grid.spacing = 1.0;
+  TinMesh mesh = MakeStartGrid(grid);
+  const std::vector<Eigen::Vector3d> flat = Points(mesh);
+  TinMesh::VertexHandle c;
+  for (auto v : mesh.vertices()) {
+    if ((ToEigen(mesh.point(v)) - Eigen::Vector3d(4, 4, 0)).norm() < 1e-9) c = v;
+  }
+  ASSERT_TRUE(c.is_valid());
+  // Dragged past its neighbour at (5, 4) in the plane: its fan overlaps the
+  // triangles beyond that neighbour, as two windows' steps can do between them.
+  mesh.set_point(c, ToOpenMesh(Eigen::Vector3d(5.6, 4.3, 0.0)));
+  const UntangleReport report = UntangleSelfIntersections(&mesh);
+  EXPECT_GT(report.pairs_before, 0);
+  EXPECT_EQ(report.pairs_after, 0);
+  EXPECT_EQ(CountSelfIntersections(mesh), 0);
+  // Local: nothing farther than 3 edges from the dragged vertex moved.
+  const std::vector<Eigen::Vector3d> after = Points(mesh);
+  int far_moved = 0;
+  for (size_t i = 0; i < after.size(); ++i) {
+    if ((flat[i] - Eigen::Vector3d(4, 4, 0)).lpNorm<Eigen::Infinity>() > 3.0 + 1e-9 &&
+        (after[i] - flat[i]).norm() > 0.0) {
+      ++far_moved;
+    }
+  }
+  EXPECT_EQ(far_moved, 0);
+  EXPECT_LE(report.vertices_moved, 49);
+}
+
 }  // namespace
 }  // namespace facets
