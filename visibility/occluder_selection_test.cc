@@ -19,17 +19,6 @@
 namespace facets {
 namespace {
 
-Rigid3d LookAtPose(const Eigen::Vector3d& centre, const Eigen::Vector3d& target) {
-  const Eigen::Vector3d z = (target - centre).normalized();
-  const Eigen::Vector3d up = std::abs(z.z()) > 0.99 ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitZ();
-  const Eigen::Vector3d x = z.cross(up).normalized();
-  const Eigen::Vector3d y = z.cross(x);
-  Eigen::Matrix3d world_from_cam;
-  world_from_cam << x, y, z;
-  const Eigen::Matrix3d cam_from_world = world_from_cam.transpose();
-  return Rigid3d(Eigen::Quaterniond(cam_from_world), -(cam_from_world * centre));
-}
-
 TEST(OccluderSelection, EveryFaceThatHidesTheWindowIsSelected) {
   // 60 m x 60 m wavy terrain of 2 m cells and a few buildings, one of them right next to
   // the window (a 12 m x 12 m patch of terrain in the middle).
@@ -64,9 +53,9 @@ TEST(OccluderSelection, EveryFaceThatHidesTheWindowIsSelected) {
 
   const Camera camera = Camera::Create(CameraModel::kPinhole, 300, 300, 160, 120, 320, 240);
   std::vector<OccluderView> views;
-  std::vector<Rigid3d> poses = {LookAtPose({0, 0, 60}, {0, 0, 0}),      LookAtPose({-40, 0, 40}, {0, 0, 0}),
-                                LookAtPose({40, 5, 35}, {0, 0, 0}),     LookAtPose({0, -45, 30}, {0, 0, 0}),
-                                LookAtPose({5, 40, 30}, {0, 2, 0}),     LookAtPose({30, 30, 50}, {10, 10, 0})};
+  std::vector<Rigid3d> poses = {LookAtForTesting({0, 0, 60}, {0, 0, 0}),      LookAtForTesting({-40, 0, 40}, {0, 0, 0}),
+                                LookAtForTesting({40, 5, 35}, {0, 0, 0}),     LookAtForTesting({0, -45, 30}, {0, 0, 0}),
+                                LookAtForTesting({5, 40, 30}, {0, 2, 0}),     LookAtForTesting({30, 30, 50}, {10, 10, 0})};
   for (const Rigid3d& pose : poses) views.push_back({&camera, pose});
   const std::vector<int> selected = FacesThatCanHide(boxes, target, views);
   const std::set<int> selected_set(selected.begin(), selected.end());
@@ -118,8 +107,8 @@ TEST(ProjectedBlocks, EveryPixelThatHitsTheWindowIsInABlock) {
   for (const auto& b : boxes) all.extend(b);
   const Camera camera = Camera::Create(CameraModel::kPinhole, 500, 500, 320, 240, 640, 480);
   long long hits = 0, outside = 0, blocks_total = 0, blocks_rect = 0;
-  for (const Rigid3d& pose : {LookAtPose({0, 0, 40}, {0, 0, 0}), LookAtPose({-35, 5, 25}, {0, 0, 0}),
-                              LookAtPose({20, -30, 20}, {3, 0, 0}), LookAtPose({10, 25, 15}, {0, 0, 2})}) {
+  for (const Rigid3d& pose : {LookAtForTesting({0, 0, 40}, {0, 0, 0}), LookAtForTesting({-35, 5, 25}, {0, 0, 0}),
+                              LookAtForTesting({20, -30, 20}, {3, 0, 0}), LookAtForTesting({10, 25, 15}, {0, 0, 2})}) {
     const auto rect = ProjectBox(all, camera, pose);
     ASSERT_TRUE(rect.has_value());
     const std::vector<PixelRect> blocks = ProjectedBlocks(boxes, camera, pose, *rect);
@@ -161,7 +150,7 @@ TEST(OccluderSelection, NothingWithoutViews) {
   std::vector<Eigen::AlignedBox3d> boxes = {Eigen::AlignedBox3d(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 1))};
   EXPECT_TRUE(FacesThatCanHide(boxes, boxes[0], {}).empty());
   const Camera camera = Camera::Create(CameraModel::kPinhole, 300, 300, 160, 120, 320, 240);
-  const Rigid3d pose = LookAtPose({0, 0, 50}, {0, 0, 100});  // looks up, away from the boxes
+  const Rigid3d pose = LookAtForTesting({0, 0, 50}, {0, 0, 100});  // looks up, away from the boxes
   EXPECT_TRUE(FacesThatCanHide(boxes, boxes[0], {{&camera, pose}}).empty());
 }
 

@@ -8,6 +8,17 @@
 
 namespace facets {
 
+Rigid3d LookAtForTesting(const Eigen::Vector3d& centre, const Eigen::Vector3d& target) {
+  const Eigen::Vector3d z = (target - centre).normalized();
+  const Eigen::Vector3d up = std::abs(z.z()) > 0.99 ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d x = z.cross(up).normalized();
+  const Eigen::Vector3d y = z.cross(x);
+  Eigen::Matrix3d world_from_cam;
+  world_from_cam << x, y, z;
+  const Eigen::Matrix3d cam_from_world = world_from_cam.transpose();
+  return Rigid3d(Eigen::Quaterniond(cam_from_world), -(cam_from_world * centre));
+}
+
 void AppendBoxForTesting(const Eigen::Vector3d& min, const Eigen::Vector3d& max,
                          bool with_bottom, FlatMesh* mesh) {
   const int base = static_cast<int>(mesh->vertices.size());

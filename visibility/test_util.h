@@ -9,9 +9,14 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "io/rigid3d.h"
 #include "mesh/tessellation.h"
 
 namespace facets {
+
+// cam_from_world of a camera at `centre` looking at `target` (COLMAP frame: x right,
+// y down, z forward), image up towards world +z, or +y when looking straight up or down.
+Rigid3d LookAtForTesting(const Eigen::Vector3d& centre, const Eigen::Vector3d& target);
 
 // A plain triangle mesh: vertices (#V) and faces (#F by 3 vertex indices,
 // counter-clockwise seen from the side the normal points to = the outside).
