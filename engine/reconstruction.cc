@@ -490,9 +490,12 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
           " vertices pulled inside the visual hull, " + std::to_string(level_report.hull_unresolved) +
           " outside by more than " + std::to_string(options.closed.hull_clamp_edges) + " edges");
     }
+    // The untangling counts the crossing pairs it leaves: no second CGAL pass for the report.
+    int crossing_left = -1;
     if (options.untangle) {
       const UntangleReport untangled = UntangleSelfIntersections(&mesh);
-      if (untangled.pairs_before > 0) {
+      crossing_left = untangled.pairs_after;
+      if (untangled.rounds > 0) {
         UpdateVertexNormals(&mesh);
         level_report.crossing_untangled = untangled.pairs_before;
         level_report.untangle_moved = untangled.vertices_moved;
@@ -511,7 +514,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     level_report.vertices = static_cast<int>(mesh.n_vertices());
     level_report.faces = static_cast<int>(mesh.n_faces());
     level_report.folded_faces = CountFoldedFaces(mesh);
-    level_report.self_intersections = CountSelfIntersections(mesh);
+    level_report.self_intersections = crossing_left >= 0 ? crossing_left : CountSelfIntersections(mesh);
     for (const WindowReport& w : adjusted.windows) {
       for (const IterationReport& it : w.iterations) level_report.fold_limited += it.fold_limited;
     }

@@ -130,9 +130,19 @@ UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds) {
   std::set<std::pair<int, int>> pairs = SelfIntersectingPairs(*mesh, Points(*mesh));
   report.pairs_before = report.pairs_after = static_cast<int>(pairs.size());
   std::vector<bool> ever_moved(mesh->n_vertices(), false);
-  for (int round = 1; round <= max_rounds && !pairs.empty(); ++round) {
+  // Folded faces give G1 patches that curl through their neighbours' even where the
+  // chord triangles do not cross: their corners are smoothed in the first round too.
+  const std::vector<bool> folded = FoldedFaces(*mesh);
+  const bool any_fold = std::find(folded.begin(), folded.end(), true) != folded.end();
+  for (int round = 1; round <= max_rounds && (!pairs.empty() || (round == 1 && any_fold)); ++round) {
     report.rounds = round;
     std::vector<bool> region(mesh->n_vertices(), false);
+    if (round == 1) {
+      for (auto f : mesh->faces()) {
+        if (!folded[f.idx()]) continue;
+        for (auto v : mesh->fv_range(f)) region[v.idx()] = true;
+      }
+    }
     for (const auto& pair : pairs) {
       for (int f : {pair.first, pair.second}) {
         for (auto v : mesh->fv_range(mesh->face_handle(f))) region[v.idx()] = true;
