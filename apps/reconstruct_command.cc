@@ -42,6 +42,7 @@ struct ReconstructArgs {
   std::optional<double> break_off;  // m; none: 0.06 ground pixel of each level
   int max_iterations = AdjustmentOptions().max_iterations;
   double crease_angle = AdjustmentOptions().crease_angle_deg;
+  bool no_rounded_ridges = false;
   std::optional<double> start_height;
   std::string start = "auto";
   std::string start_plane = "auto";
@@ -115,6 +116,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   }
   options.adjustment.max_iterations = args.max_iterations;
   options.adjustment.crease_angle_deg = args.crease_angle;
+  options.adjustment.rounded_ridges = !args.no_rounded_ridges;
   options.start_height = args.start_height;
   // --start closed selects the closed start (engine/start_closed.h); the others are the
   // open starts of engine/start_tiepoints.h.
@@ -233,6 +235,8 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--break-off", args->break_off, "largest displacement at the finest level (m); default 0.06 ground pixel of each level");
   sub->add_option("--max-iterations", args->max_iterations, "per level")->capture_default_str();
   sub->add_option("--crease-angle", args->crease_angle, "crease detection angle (deg); 180 = pure G1")->capture_default_str();
+  sub->add_flag("--no-rounded-ridges", args->no_rounded_ridges,
+                "creases only where one edge bends by the crease angle, not the middle of a rounded band (always so for closed starts)");
   sub->add_option("--start-height", args->start_height, "height of the start plane (local Z)");
   sub->add_option("--start", args->start,
                   "start surface: auto | plane | tiepoints | closed (auto: tie points when >= 20 lie in "

@@ -86,6 +86,10 @@ struct AdjustmentOptions {
   // eaves, wall edges): the surface stays continuous but not smooth across them
   // (mesh/creases.h). 180 = a G1 surface everywhere.
   double crease_angle_deg = 20.0;
+  // Also the middle row of a ridge rounded over a band of edge rows (mesh/creases.h):
+  // curvature regularisation keeps a ridge round until it is a crease. Off for closed
+  // starts, whose coarse facets bend by 10-20 degrees everywhere.
+  bool rounded_ridges = true;
   // Crease vertices get no curvature pseudo-observation across the crease; with this
   // they get one per sector ("flat on the roof side, flat on the wall side"), so a
   // wall whose vertices crumpled into creases is still smoothed (issue 7).

@@ -58,10 +58,25 @@ WindowReport RunWithCreasePass(TinMesh* mesh, const std::vector<LevelImage>& ima
   };
   WindowReport first = run();
   if (!second_pass) return first;
-  const std::vector<bool> creases = DetectCreaseEdges(*mesh, options.crease_angle_deg);
+  const std::vector<bool> creases = DetectCreaseEdges(*mesh, options.crease_angle_deg, options.rounded_ridges);
   const int found = static_cast<int>(std::count(creases.begin(), creases.end(), true));
   if (found <= first.crease_edges) return first;
+  // The second run is kept only if it fits better: a crease set that frees crumpled
+  // vertices of their regularisation (a wall's folds) fits worse and is dropped.
+  std::vector<TinMesh::Point> first_points;
+  for (auto vh : mesh->vertices()) first_points.push_back(mesh->point(vh));
+  const std::vector<Eigen::Vector3i> first_triangles = result->triangles;
+  const std::vector<double> first_grey = result->grey;
   WindowReport second = run();
+  if (second.sigma0 > first.sigma0) {
+    for (auto vh : mesh->vertices()) mesh->set_point(vh, first_points[vh.idx()]);
+    UpdateVertexNormals(mesh);
+    result->triangles = first_triangles;
+    result->grey = first_grey;
+    first.crease_passes_dropped = 1;
+    first.crease_pass_iterations_dropped = static_cast<int>(second.iterations.size());
+    return first;
+  }
   const int first_iterations = static_cast<int>(first.iterations.size());
   for (auto& it : second.iterations) it.iteration += first_iterations;
   second.iterations.insert(second.iterations.begin(), first.iterations.begin(),
@@ -70,8 +85,9 @@ WindowReport RunWithCreasePass(TinMesh* mesh, const std::vector<LevelImage>& ima
   return second;
 }
 
-Tessellation TessellateWithCreases(const TinMesh& mesh, double crease_angle_deg) {
-  const CornerNormals corners = ComputeCornerNormals(mesh, DetectCreaseEdges(mesh, crease_angle_deg));
+Tessellation TessellateWithCreases(const TinMesh& mesh, const AdjustmentOptions& options) {
+  const CornerNormals corners =
+      ComputeCornerNormals(mesh, DetectCreaseEdges(mesh, options.crease_angle_deg, options.rounded_ridges));
   return Tessellate(mesh, BuildPatches(mesh, corners), corners);
 }
 
@@ -131,7 +147,7 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
       Tessellation snapshot;
       std::vector<Eigen::AlignedBox3d> face_boxes;
       if (many && options.occluders) {
-        snapshot = TessellateWithCreases(*mesh, adjustment.crease_angle_deg);
+        snapshot = TessellateWithCreases(*mesh, adjustment);
         face_boxes = FaceBoxes(snapshot);
       }
       tbb::parallel_for(size_t{0}, group.size(), [&](size_t g) {
@@ -265,6 +281,8 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
     s.redundancy += r.redundancy;
     s.cg_iterations_total += r.cg_iterations_total;
     s.crease_edges += r.crease_edges;
+    s.crease_passes_dropped += r.crease_passes_dropped;
+    s.crease_pass_iterations_dropped += r.crease_pass_iterations_dropped;
     s.seconds_precision += r.seconds_precision;
     s.precision_computed = s.precision_computed && r.precision_computed;
     pooled += r.sigma0 * r.sigma0 * static_cast<double>(r.redundancy);
@@ -280,7 +298,7 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
                                      : std::vector<std::vector<std::array<double, 2>>>{};
 
   if (keep_grey) {
-    level.tessellation = TessellateWithCreases(*mesh, adjustment.crease_angle_deg);
+    level.tessellation = TessellateWithCreases(*mesh, adjustment);
     const int channels = results.front().channels;
     level.grey.assign(level.tessellation.points.size() * channels,
                       std::numeric_limits<double>::quiet_NaN());

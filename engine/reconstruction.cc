@@ -241,6 +241,8 @@ std::string ReconstructionReport::Json() const {
                      {"redundancy", w.redundancy},
                      {"sigma0", w.sigma0},
                      {"crease_edges", w.crease_edges},
+                     {"crease_passes_dropped", w.crease_passes_dropped},
+                     {"crease_pass_iterations_dropped", w.crease_pass_iterations_dropped},
                      {"seconds", w.seconds_total},
                      {"seconds_precision", w.seconds_precision},
                      {"precision_computed", w.precision_computed}};
@@ -353,6 +355,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
                                : adjustment.break_off * std::pow(2.0, level);
     if (adjustment.max_step == 0.0) adjustment.max_step = 0.5 * edge_length(level);
     adjustment.compute_precision = options.adjustment.compute_precision && level == 0;
+    if (closed) adjustment.rounded_ridges = false;
     return adjustment;
   };
 
@@ -408,13 +411,15 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
   say("stage start: " + result.report.start_surface + (result.report.start_detail.empty() ? "" : ": " + result.report.start_detail));
   for (int level = coarsest; level >= 0; --level) {
     const auto level_start = std::chrono::steady_clock::now();
+    const AdjustmentOptions adjustment_options = level_options(level);
     if (level != coarsest) {
       // One pyramid level down: quaternary subdivision keeps the shape (creases
       // included), the quality pass splits what walls stretched.
       // (Tangential smoothing is left out for now: it re-projects onto the plain G1
       // surface and would round the creases again.)
+      const AdjustmentOptions coarser = level_options(level + 1);  // whose creases the mesh has
       mesh = QuaternarySubdivide(
-          mesh, ComputeCornerNormals(mesh, options.adjustment.crease_angle_deg));
+          mesh, ComputeCornerNormals(mesh, coarser.crease_angle_deg, coarser.rounded_ridges));
       QualityOptions quality;
       quality.target_edge_length = edge_length(level);
       // Two rounds at most: a diverged level (a surface torn into long spikes) must not
@@ -478,7 +483,8 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     if (level > 0) relax_unseen();
     // Silhouette constraint of a visual-hull start: the surface may not leave the hull.
     if (closed && closed->visual_hull && options.closed.hull_clamp) {
-      const std::vector<bool> creases = DetectCreaseEdges(mesh, options.adjustment.crease_angle_deg);
+      const std::vector<bool> creases = DetectCreaseEdges(mesh, adjustment_options.crease_angle_deg,
+                                                          adjustment_options.rounded_ridges);
       level_report.hull_clamped = ClampToVisualHull(
           *closed, options.closed.hull_clamp_edges * edge_length(level), &mesh, &level_report.hull_unresolved);
       if (level == 0 && level_report.hull_clamped > 0) {
@@ -501,7 +507,8 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
         level_report.untangle_moved = untangled.vertices_moved;
         if (level == 0) {
           // Same topology: only the products' surface points move.
-          const std::vector<bool> creases = DetectCreaseEdges(mesh, options.adjustment.crease_angle_deg);
+          const std::vector<bool> creases = DetectCreaseEdges(mesh, adjustment_options.crease_angle_deg,
+                                                          adjustment_options.rounded_ridges);
           UpdateTessellationPoints(BuildPatches(mesh, ComputeCornerNormals(mesh, creases)),
                                    &adjusted.tessellation);
         }

@@ -84,6 +84,10 @@ struct WindowReport {
   long long redundancy = 0;
   int cg_iterations_total = 0;
   int crease_edges = 0;
+  // Windows whose second run with the sharpened creases fitted worse and was dropped
+  // (engine/level_windows.cc); its iterations are not in `iterations`.
+  int crease_passes_dropped = 0;
+  int crease_pass_iterations_dropped = 0;
   double seconds_total = 0.0;
   double seconds_precision = 0.0;
   bool precision_computed = false;

@@ -27,17 +27,80 @@ int Find(std::vector<int>& parent, int i) {
 
 }  // namespace
 
-std::vector<bool> DetectCreaseEdges(const TinMesh& mesh, double crease_angle_deg) {
+std::vector<bool> DetectCreaseEdges(const TinMesh& mesh, double crease_angle_deg, bool rounded_ridges) {
   std::vector<bool> crease(mesh.n_edges(), false);
   if (crease_angle_deg >= 180.0) return crease;
   std::vector<Eigen::Vector3d> face_normal(mesh.n_faces());
-  for (auto fh : mesh.faces()) face_normal[fh.idx()] = UnitFaceNormal(mesh, fh);
+  std::vector<Eigen::Vector3d> area_normal(mesh.n_faces());
+  for (auto fh : mesh.faces()) {
+    auto it = mesh.cfv_iter(fh);
+    const Eigen::Vector3d p0 = ToEigen(mesh.point(*it));
+    const Eigen::Vector3d p1 = ToEigen(mesh.point(*++it));
+    const Eigen::Vector3d p2 = ToEigen(mesh.point(*++it));
+    area_normal[fh.idx()] = (p1 - p0).cross(p2 - p0);
+    const double len = area_normal[fh.idx()].norm();
+    face_normal[fh.idx()] = len > 0.0 ? Eigen::Vector3d(area_normal[fh.idx()] / len) : Eigen::Vector3d::Zero();
+  }
+  // Area-weighted vertex normals of the current geometry (the mesh's stored normals
+  // may be a step behind).
+  std::vector<Eigen::Vector3d> vertex_normal(mesh.n_vertices(), Eigen::Vector3d::Zero());
+  for (auto fh : mesh.faces()) {
+    for (auto vh : mesh.fv_range(fh)) vertex_normal[vh.idx()] += area_normal[fh.idx()];
+  }
+  for (auto& n : vertex_normal) {
+    const double len = n.norm();
+    if (len > 0.0) n /= len;
+  }
   const double cos_crease = std::cos(crease_angle_deg * M_PI / 180.0);
+  const double cos_half = std::cos(0.5 * crease_angle_deg * M_PI / 180.0);
+  std::vector<double> cos_dihedral(mesh.n_edges(), 1.0);
   for (auto eh : mesh.edges()) {
     if (mesh.is_boundary(eh)) continue;
     const auto f0 = mesh.face_handle(mesh.halfedge_handle(eh, 0));
     const auto f1 = mesh.face_handle(mesh.halfedge_handle(eh, 1));
-    crease[eh.idx()] = face_normal[f0.idx()].dot(face_normal[f1.idx()]) < cos_crease;
+    cos_dihedral[eh.idx()] = face_normal[f0.idx()].dot(face_normal[f1.idx()]);
+    crease[eh.idx()] = cos_dihedral[eh.idx()] < cos_crease;
+  }
+  if (!rounded_ridges) return crease;
+  // A ridge the regularisation has rounded over two or three rows of edges: no single
+  // edge reaches the crease angle, but the bend across the edge's band does. The band
+  // is measured between the vertex normals of the two opposite corners (each averages
+  // the faces one row further out), and only the most bent edge of the rows, a local
+  // maximum against the roughly parallel edges at those corners, becomes the crease.
+  // It must bend by half the crease angle itself, so smooth curvature (the seed's
+  // cylinders, 3.4 degrees per 2 m) and noise stay G1.
+  const double cos_parallel = std::cos(30.0 * M_PI / 180.0);
+  std::vector<bool> on_crease(mesh.n_vertices(), false);
+  for (auto eh : mesh.edges()) {
+    if (!crease[eh.idx()]) continue;
+    on_crease[mesh.to_vertex_handle(mesh.halfedge_handle(eh, 0)).idx()] = true;
+    on_crease[mesh.from_vertex_handle(mesh.halfedge_handle(eh, 0)).idx()] = true;
+  }
+  for (auto eh : mesh.edges()) {
+    if (crease[eh.idx()] || mesh.is_boundary(eh) || cos_dihedral[eh.idx()] >= cos_half) continue;
+    const auto h0 = mesh.halfedge_handle(eh, 0);
+    const auto h1 = mesh.halfedge_handle(eh, 1);
+    const auto c = mesh.to_vertex_handle(mesh.next_halfedge_handle(h0));
+    const auto d = mesh.to_vertex_handle(mesh.next_halfedge_handle(h1));
+    // A corner on the border has half a ring: its normal says nothing about the band;
+    // a corner on a crease already explains the bend (an edge from a sharp ridge
+    // down into the roof plane).
+    if (mesh.is_boundary(c) || mesh.is_boundary(d) || on_crease[c.idx()] || on_crease[d.idx()]) continue;
+    if (vertex_normal[c.idx()].dot(vertex_normal[d.idx()]) >= cos_crease) continue;
+    const Eigen::Vector3d dir =
+        (ToEigen(mesh.point(mesh.to_vertex_handle(h0))) - ToEigen(mesh.point(mesh.from_vertex_handle(h0)))).normalized();
+    bool maximum = true;
+    for (auto corner : {c, d}) {
+      for (auto heh : mesh.voh_range(corner)) {
+        const auto other = mesh.edge_handle(heh);
+        if (other == eh || mesh.is_boundary(other)) continue;
+        const Eigen::Vector3d odir =
+            (ToEigen(mesh.point(mesh.to_vertex_handle(heh))) - ToEigen(mesh.point(corner))).normalized();
+        if (std::abs(odir.dot(dir)) < cos_parallel) continue;
+        if (cos_dihedral[other.idx()] < cos_dihedral[eh.idx()]) maximum = false;
+      }
+    }
+    crease[eh.idx()] = maximum;
   }
   return crease;
 }

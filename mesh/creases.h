@@ -37,15 +37,18 @@ struct CornerNormals {
 };
 
 // Interior edges whose adjacent unit face normals enclose more than crease_angle_deg
-// (>= 180: none).
-std::vector<bool> DetectCreaseEdges(const TinMesh& mesh, double crease_angle_deg);
+// (>= 180: none), and with rounded_ridges the ridge row of a crease rounded over a band of edge rows: an
+// edge bent by at least half the angle, whose opposite corners' vertex normals enclose
+// more than the angle, and that bends most among the roughly parallel edges at those
+// corners (curvature regularisation keeps a ridge round until it is declared a crease).
+std::vector<bool> DetectCreaseEdges(const TinMesh& mesh, double crease_angle_deg, bool rounded_ridges = false);
 
 // Corner normals for a given set of crease edges (kept fixed while a window is
 // adjusted, so that the grey lattice keeps its node indices). Vertex normals must be
 // up to date (UpdateVertexNormals).
 CornerNormals ComputeCornerNormals(const TinMesh& mesh, const std::vector<bool>& crease_edge);
-inline CornerNormals ComputeCornerNormals(const TinMesh& mesh, double crease_angle_deg) {
-  return ComputeCornerNormals(mesh, DetectCreaseEdges(mesh, crease_angle_deg));
+inline CornerNormals ComputeCornerNormals(const TinMesh& mesh, double crease_angle_deg, bool rounded_ridges = false) {
+  return ComputeCornerNormals(mesh, DetectCreaseEdges(mesh, crease_angle_deg, rounded_ridges));
 }
 
 // Patches with corner normals (compare FacePatch / BuildPatches of mesh/tin.h, which

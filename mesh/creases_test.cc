@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <set>
@@ -137,6 +138,65 @@ TEST(Creases, GreyLatticeIsSplitAlongCreases) {
     for (int k = 0; k < kSubTrianglesPerFace; ++k)
       for (int c = 0; c < 3; ++c) EXPECT_EQ(nodes0.count(split.triangles[f1 * kSubTrianglesPerFace + k][c]), 0u);
   }
+}
+
+// A 20-degree gable whose ridge the curvature regularisation has rounded: the faces
+// next to the ridge tilt by 8 degrees, the next row by 16, the roof beyond by 20. No
+// edge bends by 20 degrees (the ridge row by 16, the others by 8 and 4), but across
+// the ridge row's band the vertex normals enclose about 24: the ridge row, and only
+// it, is a crease.
+double RoundedRidgeHeight(double, double y) {
+  const double t8 = std::tan(8.0 * M_PI / 180.0), t16 = std::tan(16.0 * M_PI / 180.0);
+  const double a = std::abs(y);
+  if (a <= 1.0) return 2.0 - t8 * a;
+  if (a <= 2.0) return 2.0 - t8 - t16 * (a - 1.0);
+  return 2.0 - t8 - t16 - kSlope * (a - 2.0);
+}
+
+TEST(Creases, RidgeRoundedOverABandOfRowsIsFoundInItsMiddleRow) {
+  StartGridOptions grid;
+  grid.min = Eigen::Vector2d(-4, -4);
+  grid.max = Eigen::Vector2d(4, 4);
+  grid.spacing = 1.0;
+  grid.height = RoundedRidgeHeight;
+  const TinMesh mesh = MakeStartGrid(grid);
+  const std::vector<bool> crease = DetectCreaseEdges(mesh, 20.0, /*rounded_ridges=*/true);
+  int found = 0, on_ridge = 0;
+  for (auto eh : mesh.edges()) {
+    if (!crease[eh.idx()]) continue;
+    ++found;
+    const auto h = mesh.halfedge_handle(eh, 0);
+    if (std::abs(mesh.point(mesh.from_vertex_handle(h))[1]) < 1e-9 &&
+        std::abs(mesh.point(mesh.to_vertex_handle(h))[1]) < 1e-9) {
+      ++on_ridge;
+    }
+  }
+  // The row y = 0 has 8 unit edges; the two at the ends have a corner on the grid's
+  // border, whose half ring says nothing about the band.
+  EXPECT_EQ(found, 6);
+  EXPECT_EQ(on_ridge, 6);
+  // At a crease angle of 30 degrees the band (about 24) is no crease.
+  const std::vector<bool> none = DetectCreaseEdges(mesh, 30.0, true);
+  // Without the band rule the 16-degree ridge row is no crease at 20 degrees.
+  const std::vector<bool> plain = DetectCreaseEdges(mesh, 20.0, false);
+  EXPECT_EQ(std::count(plain.begin(), plain.end(), true), 0);
+  EXPECT_EQ(std::count(none.begin(), none.end(), true), 0);
+}
+
+// Smooth curvature and noise stay G1: a parabolic cylinder bending 3.4 degrees per
+// 2 m (the seed's) sampled at 1 m, with 2 cm of height noise on every vertex.
+TEST(Creases, SmoothCurvatureAndNoiseMakeNoCrease) {
+  StartGridOptions grid;
+  grid.min = Eigen::Vector2d(-6, -6);
+  grid.max = Eigen::Vector2d(6, 6);
+  grid.spacing = 1.0;
+  grid.height = [](double x, double y) {
+    const double noise = 0.02 * std::sin(12.9898 * x + 78.233 * y + 0.5 * x * y);
+    return 3.0 - 0.0148 * y * y + noise;  // slope 2 * 0.0148 * y: 3.4 degrees per 2 m
+  };
+  const TinMesh mesh = MakeStartGrid(grid);
+  const std::vector<bool> crease = DetectCreaseEdges(mesh, 20.0, /*rounded_ridges=*/true);
+  EXPECT_EQ(std::count(crease.begin(), crease.end(), true), 0);
 }
 
 }  // namespace
