@@ -36,7 +36,7 @@ struct ReconstructArgs {
   int levels = 3;
   double lambda = AdjustmentOptions().lambda;
   std::string regularisation = "curvature";
-  std::string radiometry = "none";
+  std::string radiometry = "linear";  // real photographs differ in exposure (docs/EXPERIMENTS.md)
   std::string filter = "binomial5";
   std::string solver = WindowSolverName(AdjustmentOptions().solver);
   std::string sigma_model = AdjustmentOptions().correlated_residuals ? "correlated" : "white";
