@@ -11,6 +11,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_map>
 
 #include "engine/observation.h"
 #include "mesh/creases.h"
@@ -333,23 +334,43 @@ CorrelatedResiduals WindowAdjustment::ResidualCorrelation(
       x0 = std::min(x0, o.x); x1 = std::max(x1, o.x);
       y0 = std::min(y0, o.y); y1 = std::max(y1, o.y);
     }
-    const int w = x1 - x0 + 1, h = y1 - y0 + 1;
-    std::vector<std::array<float, 2>> grid(static_cast<size_t>(w) * h,
-                                           {std::numeric_limits<float>::quiet_NaN(), 0.0f});
-    for (size_t o = 0; o < obs.size(); ++o) grid[static_cast<size_t>(obs[o].y - y0) * w + (obs[o].x - x0)] = terms[o];
-    for (int y = 0; y < h; ++y) {
-      for (int x = 0; x < w; ++x) {
-        const auto& p = grid[static_cast<size_t>(y) * w + x];
-        if (std::isnan(p[0])) continue;
-        for (int dy = 0; dy <= L && y + dy < h; ++dy) {
-          for (int dx = dy == 0 ? 0 : -L; dx <= L; ++dx) {
-            if (x + dx < 0 || x + dx >= w) continue;
-            const auto& q = grid[static_cast<size_t>(y + dy) * w + x + dx];
-            if (std::isnan(q[0])) continue;
-            const size_t lag = static_cast<size_t>(dy) * kSide + dx + L;
-            svv[lag] += double(p[0]) * q[0]; sv1[lag] += double(p[0]) * p[0]; sv2[lag] += double(q[0]) * q[0];
-            saa[lag] += double(p[1]) * q[1]; sa1[lag] += double(p[1]) * p[1]; sa2[lag] += double(q[1]) * q[1];
-          }
+    // Pixel -> observation: a dense index over the observations' bounding box, or a hash
+    // map when the box is much larger than the observations (e.g. a window seen twice far
+    // apart in one large image), so the memory stays bounded by the observations.
+    const int64_t w = x1 - x0 + 1, h = y1 - y0 + 1;
+    const bool dense = w * h <= 8 * static_cast<int64_t>(obs.size()) + (int64_t{1} << 20);
+    std::vector<int32_t> grid;
+    std::unordered_map<int64_t, int32_t> sparse;
+    if (dense) {
+      grid.assign(static_cast<size_t>(w * h), -1);
+    } else {
+      sparse.reserve(obs.size());
+    }
+    for (size_t o = 0; o < obs.size(); ++o) {
+      if (std::isnan(terms[o][0])) continue;
+      const int64_t key = (obs[o].y - y0) * w + (obs[o].x - x0);
+      if (dense) grid[static_cast<size_t>(key)] = static_cast<int32_t>(o);
+      else sparse[key] = static_cast<int32_t>(o);
+    }
+    auto find = [&](int64_t x, int64_t y) -> int32_t {
+      if (x < 0 || x >= w || y < 0 || y >= h) return -1;
+      const int64_t key = y * w + x;
+      if (dense) return grid[static_cast<size_t>(key)];
+      const auto it = sparse.find(key);
+      return it == sparse.end() ? -1 : it->second;
+    };
+    for (size_t o = 0; o < obs.size(); ++o) {
+      const auto& p = terms[o];
+      if (std::isnan(p[0])) continue;
+      const int64_t x = obs[o].x - x0, y = obs[o].y - y0;
+      for (int dy = 0; dy <= L; ++dy) {
+        for (int dx = dy == 0 ? 0 : -L; dx <= L; ++dx) {
+          const int32_t other = find(x + dx, y + dy);
+          if (other < 0) continue;
+          const auto& q = terms[static_cast<size_t>(other)];
+          const size_t lag = static_cast<size_t>(dy) * kSide + dx + L;
+          svv[lag] += double(p[0]) * q[0]; sv1[lag] += double(p[0]) * p[0]; sv2[lag] += double(q[0]) * q[0];
+          saa[lag] += double(p[1]) * q[1]; sa1[lag] += double(p[1]) * p[1]; sa2[lag] += double(q[1]) * q[1];
         }
       }
     }
