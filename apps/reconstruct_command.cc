@@ -36,9 +36,10 @@ struct ReconstructArgs {
   int levels = 3;
   double lambda = AdjustmentOptions().lambda;
   std::string regularisation = "curvature";
-  std::string radiometry = "none";
+  std::string radiometry = "linear";  // real photographs differ in exposure (docs/EXPERIMENTS.md)
   std::string filter = "binomial5";
   std::string solver = WindowSolverName(AdjustmentOptions().solver);
+  std::string sigma_model = AdjustmentOptions().correlated_residuals ? "correlated" : "white";
   std::optional<double> break_off;  // m; none: 0.06 ground pixel of each level
   int max_iterations = AdjustmentOptions().max_iterations;
   double crease_angle = AdjustmentOptions().crease_angle_deg;
@@ -109,6 +110,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.adjustment.regularisation = RegularisationFromName(args.regularisation);
   options.adjustment.radiometry = RadiometricModelFromName(args.radiometry);
   options.adjustment.solver = WindowSolverFromName(args.solver);
+  options.adjustment.correlated_residuals = args.sigma_model == "correlated";
   if (args.break_off) {
     options.adjustment.break_off = *args.break_off;
   } else {
@@ -228,6 +230,11 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--regularisation", args->regularisation, "curvature | adaptive | none")->capture_default_str();
   sub->add_option("--radiometry", args->radiometry, "none | constant | linear")->capture_default_str();
   sub->add_option("--filter", args->filter, "pyramid filter: binomial3 | binomial5 | meer13")->capture_default_str();
+  sub->add_option("--sigma-model", args->sigma_model,
+                  "vertex sigma: white (residuals independent) | correlated (variance factor from the residuals' "
+                  "correlation between neighbouring pixels, docs/ENGINE.md)")
+      ->check(CLI::IsMember({"white", "correlated"}))
+      ->capture_default_str();
   sub->add_option("--solver", args->solver,
                   "window solver: ldlt (sparse LDL^T, pattern analysed once per window) | pcg (SSOR-PCG)")
       ->check(CLI::IsMember({"ldlt", "pcg"}))

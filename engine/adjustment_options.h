@@ -120,6 +120,11 @@ struct AdjustmentOptions {
   // solve per geometry unknown): meant for windows of a few hundred triangles; above
   // max_precision_unknowns unknowns it is skipped (WindowReport::precision_computed).
   bool compute_precision = true;
+  // Per-vertex sigma accounts for the correlation of the residuals between neighbouring
+  // pixels (image low-pass, resampling, unmodelled fine texture): the variance of dn is
+  // multiplied by the factor sum over pixel lags of rho_v(lag) x rho_a(lag), rho_v the
+  // residuals' and rho_a the displacement coefficients' autocorrelation (docs/ENGINE.md).
+  bool correlated_residuals = true;
   int max_precision_unknowns = 60000;
   // A vertex is flagged undetermined when fewer images than this saw it, or its
   // standard deviation exceeds max_sigma (object units; 0 = no sigma test).

@@ -254,6 +254,7 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
   s.vertex_views.assign(num_vertices, 0);
   s.vertex_flags.assign(num_vertices, kVertexFewViews);
   s.precision_computed = true;
+  s.variance_factor = 0.0;  // pooled below
   double pooled = 0.0;
   bool any = false;
   for (size_t w = 0; w < windows.size(); ++w) {
@@ -286,6 +287,10 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
     s.seconds_precision += r.seconds_precision;
     s.precision_computed = s.precision_computed && r.precision_computed;
     pooled += r.sigma0 * r.sigma0 * static_cast<double>(r.redundancy);
+    // Correlation and variance factor: means weighted by the redundancy.
+    s.residual_rho_x += r.residual_rho_x * static_cast<double>(r.redundancy);
+    s.residual_rho_y += r.residual_rho_y * static_cast<double>(r.redundancy);
+    s.variance_factor += r.variance_factor * static_cast<double>(r.redundancy);
     if (r.iterations.size() > s.iterations.size()) s.iterations = r.iterations;
     level.windows.push_back(r);
   }
@@ -294,6 +299,13 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
                              results.front().error + ")");
   }
   s.sigma0 = s.redundancy > 0 ? std::sqrt(pooled / static_cast<double>(s.redundancy)) : 0.0;
+  if (s.redundancy > 0) {
+    s.residual_rho_x /= static_cast<double>(s.redundancy);
+    s.residual_rho_y /= static_cast<double>(s.redundancy);
+    s.variance_factor /= static_cast<double>(s.redundancy);
+  } else {
+    s.variance_factor = 1.0;
+  }
   s.radiometry = windows.size() == 1 ? results.front().report.radiometry
                                      : std::vector<std::vector<std::array<double, 2>>>{};
 

@@ -245,7 +245,10 @@ std::string ReconstructionReport::Json() const {
                      {"crease_pass_iterations_dropped", w.crease_pass_iterations_dropped},
                      {"seconds", w.seconds_total},
                      {"seconds_precision", w.seconds_precision},
-                     {"precision_computed", w.precision_computed}};
+                     {"precision_computed", w.precision_computed},
+                     {"residual_rho_x", w.residual_rho_x},
+                     {"residual_rho_y", w.residual_rho_y},
+                     {"variance_factor", w.variance_factor}};
       for (const auto& it : w.iterations) {
         window["per_iteration"].push_back(
             {{"iteration", it.iteration},

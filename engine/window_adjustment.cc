@@ -8,8 +8,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_map>
 
 #include "engine/observation.h"
 #include "mesh/creases.h"
@@ -314,6 +316,82 @@ double WindowAdjustment::RobustScale(const std::vector<std::vector<PixelObservat
   return 1.4826 * *middle;
 }
 
+CorrelatedResiduals WindowAdjustment::ResidualCorrelation(
+    const std::vector<std::vector<PixelObservation>>& casts) const {
+  constexpr int L = kMaxCorrelationLag;
+  constexpr int kSide = 2 * L + 1;
+  const size_t num_lags = static_cast<size_t>(kSide) * (L + 1);
+  // Pooled sums over pixel pairs (p, p + lag) of one image, lag in the upper half-plane:
+  // for the residuals v and the displacement coefficients a.
+  std::vector<double> svv(num_lags, 0.0), sv1(num_lags, 0.0), sv2(num_lags, 0.0);
+  std::vector<double> saa(num_lags, 0.0), sa1(num_lags, 0.0), sa2(num_lags, 0.0);
+  for (size_t k = 0; k < casts.size() && k < obs_terms_.size(); ++k) {
+    const auto& obs = casts[k];
+    const auto& terms = obs_terms_[k];
+    if (obs.empty() || terms.size() != obs.size()) continue;
+    int x0 = obs[0].x, x1 = x0, y0 = obs[0].y, y1 = y0;
+    for (const PixelObservation& o : obs) {
+      x0 = std::min(x0, o.x); x1 = std::max(x1, o.x);
+      y0 = std::min(y0, o.y); y1 = std::max(y1, o.y);
+    }
+    // Pixel -> observation: a dense index over the observations' bounding box, or a hash
+    // map when the box is much larger than the observations (e.g. a window seen twice far
+    // apart in one large image), so the memory stays bounded by the observations.
+    const int64_t w = x1 - x0 + 1, h = y1 - y0 + 1;
+    const bool dense = w * h <= 8 * static_cast<int64_t>(obs.size()) + (int64_t{1} << 20);
+    std::vector<int32_t> grid;
+    std::unordered_map<int64_t, int32_t> sparse;
+    if (dense) {
+      grid.assign(static_cast<size_t>(w * h), -1);
+    } else {
+      sparse.reserve(obs.size());
+    }
+    for (size_t o = 0; o < obs.size(); ++o) {
+      if (std::isnan(terms[o][0])) continue;
+      const int64_t key = (obs[o].y - y0) * w + (obs[o].x - x0);
+      if (dense) grid[static_cast<size_t>(key)] = static_cast<int32_t>(o);
+      else sparse[key] = static_cast<int32_t>(o);
+    }
+    auto find = [&](int64_t x, int64_t y) -> int32_t {
+      if (x < 0 || x >= w || y < 0 || y >= h) return -1;
+      const int64_t key = y * w + x;
+      if (dense) return grid[static_cast<size_t>(key)];
+      const auto it = sparse.find(key);
+      return it == sparse.end() ? -1 : it->second;
+    };
+    for (size_t o = 0; o < obs.size(); ++o) {
+      const auto& p = terms[o];
+      if (std::isnan(p[0])) continue;
+      const int64_t x = obs[o].x - x0, y = obs[o].y - y0;
+      for (int dy = 0; dy <= L; ++dy) {
+        for (int dx = dy == 0 ? 0 : -L; dx <= L; ++dx) {
+          const int32_t other = find(x + dx, y + dy);
+          if (other < 0) continue;
+          const auto& q = terms[static_cast<size_t>(other)];
+          const size_t lag = static_cast<size_t>(dy) * kSide + dx + L;
+          svv[lag] += double(p[0]) * q[0]; sv1[lag] += double(p[0]) * p[0]; sv2[lag] += double(q[0]) * q[0];
+          saa[lag] += double(p[1]) * q[1]; sa1[lag] += double(p[1]) * p[1]; sa2[lag] += double(q[1]) * q[1];
+        }
+      }
+    }
+  }
+  CorrelatedResiduals c;
+  auto corr = [](double ab, double aa, double bb) { return aa > 0.0 && bb > 0.0 ? ab / std::sqrt(aa * bb) : 0.0; };
+  c.rho_x = corr(svv[L + 1], sv1[L + 1], sv2[L + 1]);
+  c.rho_y = corr(svv[kSide + L], sv1[kSide + L], sv2[kSide + L]);
+  // Variance of a weighted sum sum_p a_p v_p of a stationary field v relative to white
+  // v: sum over lags of rho_v(lag) rho_a(lag) (both lag and -lag; lag 0 counts once).
+  double factor = 1.0;
+  for (int dy = 0; dy <= L; ++dy) {
+    for (int dx = dy == 0 ? 1 : -L; dx <= L; ++dx) {
+      const size_t lag = static_cast<size_t>(dy) * kSide + dx + L;
+      factor += 2.0 * corr(svv[lag], sv1[lag], sv2[lag]) * corr(saa[lag], sa1[lag], sa2[lag]);
+    }
+  }
+  c.variance_factor = std::max(factor, 1.0);
+  return c;
+}
+
 void WindowAdjustment::InitialiseGrey(const std::vector<std::vector<PixelObservation>>& casts) {
   const size_t num_nodes = tess_.points.size();
   std::vector<double> sum(num_nodes * channels_, 0.0), weight(num_nodes, 0.0);
@@ -357,9 +435,14 @@ double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservati
     p.rhs = Eigen::VectorXd::Zero(num_unknowns_);
     return p;
   });
+  obs_terms_.assign(casts.size(), {});
   for (size_t k = 0; k < casts.size(); ++k) {
     const auto& observations = casts[k];
     if (observations.empty()) continue;
+    // Residual and grey-value change per unit displacement of the face, summed over
+    // the channels; NaN: no observation (ResidualCorrelation).
+    obs_terms_[k].assign(observations.size(), {std::numeric_limits<float>::quiet_NaN(), 0.0f});
+    auto& terms = obs_terms_[k];
     const PixelRays rays(*images_[k].camera, images_[k].cam_from_world);
     const ImagePlanes& pixels = *images_[k].pixels;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, observations.size(), 4096),
@@ -406,6 +489,9 @@ double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservati
             }
           }
           const double a[6] = {lin.dn[0], lin.dn[1], lin.dn[2], lin.grey[0], lin.grey[1], lin.grey[2]};
+          auto& term = terms[o];
+          term[0] = (std::isnan(term[0]) ? 0.0f : term[0]) + static_cast<float>(l);
+          term[1] += static_cast<float>(a[0] + a[1] + a[2]);
           const int64_t* table = &slots_[(static_cast<size_t>(f) * channels_ + c) * kLocal * kLocal];
           int unknown[6];
           for (int i = 0; i < 3; ++i) unknown[i] = vertex_unknown_[face_vertices_[f][i]];
@@ -719,6 +805,10 @@ WindowReport WindowAdjustment::Run() {
     }
   }
 
+  const CorrelatedResiduals correlated = ResidualCorrelation(casts);
+  report.residual_rho_x = correlated.rho_x;
+  report.residual_rho_y = correlated.rho_y;
+  report.variance_factor = options_.correlated_residuals ? correlated.variance_factor : 1.0;
   report.vertex_sigma.assign(num_vertices, 0.0);
   report.vertex_flags.assign(num_vertices, kVertexOk);
   if (options_.compute_precision && num_geometry_ > 0 &&
@@ -731,7 +821,7 @@ WindowReport WindowAdjustment::Run() {
     const Eigen::VectorXd q =
         ldlt_.factorized() ? ldlt_.InverseDiagonal(geometry) : InverseDiagonal(normal_, geometry);
     for (int v = 0; v < num_vertices; ++v) {
-      if (vertex_unknown_[v] >= 0) report.vertex_sigma[v] = report.sigma0 * std::sqrt(std::max(q[vertex_unknown_[v]], 0.0));
+      if (vertex_unknown_[v] >= 0) report.vertex_sigma[v] = report.sigma0 * std::sqrt(report.variance_factor * std::max(q[vertex_unknown_[v]], 0.0));
     }
     report.seconds_precision = Seconds(start);
   }

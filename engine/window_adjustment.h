@@ -68,6 +68,13 @@ struct IterationReport {
   double seconds_update = 0.0;     // vertices, normals, tessellation, Embree scene
 };
 
+// Correlation of the residuals between neighbouring pixels of one image (lag 1 along x
+// and y) and the variance factor of the vertex displacements it implies (>= 1).
+struct CorrelatedResiduals {
+  double rho_x = 0.0, rho_y = 0.0;
+  double variance_factor = 1.0;
+};
+
 struct WindowReport {
   std::vector<IterationReport> iterations;
   bool converged = false;
@@ -91,6 +98,10 @@ struct WindowReport {
   double seconds_total = 0.0;
   double seconds_precision = 0.0;
   bool precision_computed = false;
+  // Correlation of the residuals of neighbouring pixels (lag 1 along x, y) and the
+  // variance factor applied to vertex_sigma (1 unless AdjustmentOptions::correlated_residuals).
+  double residual_rho_x = 0.0, residual_rho_y = 0.0;
+  double variance_factor = 1.0;
   // Per TIN vertex.
   std::vector<double> vertex_sigma;  // standard deviation of dn, object units (0: fixed)
   std::vector<int> vertex_views;     // images that saw the vertex's faces
@@ -145,6 +156,10 @@ class WindowAdjustment {
   long long DropBackground(std::vector<std::vector<PixelObservation>>* casts) const;
   // 1.4826 x the median absolute residual at the current values (0: no observations).
   double RobustScale(const std::vector<std::vector<PixelObservation>>& casts) const;
+  // Correlation of the last linearisation's residuals between neighbouring pixels of
+  // the same image, and the variance factor they imply (AdjustmentOptions::correlated_residuals).
+  static constexpr int kMaxCorrelationLag = 4;
+  CorrelatedResiduals ResidualCorrelation(const std::vector<std::vector<PixelObservation>>& casts) const;
   double Accumulate(const std::vector<std::vector<PixelObservation>>& casts,
                     Eigen::VectorXd* rhs, long long* count);
   double AccumulateCurvature(Eigen::VectorXd* rhs, long long* count);
@@ -171,6 +186,8 @@ class WindowAdjustment {
   std::vector<double> curvature_target_;  // adaptive regularisation, per vertex
   // Robust weighting of the current iteration (0 = off) and what it did.
   double robust_scale_ = 0.0;
+  // Per image and observation of the last Accumulate: residual, displacement coefficient.
+  std::vector<std::vector<std::array<float, 2>>> obs_terms_;
   long long rejected_ = 0;
   long long downweighted_ = 0;
 
