@@ -36,7 +36,10 @@ struct ReconstructArgs {
   int levels = 3;
   double lambda = AdjustmentOptions().lambda;
   std::string regularisation = "curvature";
-  std::string radiometry = "linear";  // real photographs differ in exposure (docs/EXPERIMENTS.md)
+  // Real photographs need "linear" (docs/EXPERIMENTS.md, fountain); the default stays "none"
+  // because the h0/h1 unknowns couple with every unknown of a window and make the
+  // block benchmark 2x slower (docs/ENGINE.md, Radiometric model).
+  std::string radiometry = "none";
   std::string filter = "binomial5";
   std::string solver = WindowSolverName(AdjustmentOptions().solver);
   std::string sigma_model = AdjustmentOptions().correlated_residuals ? "correlated" : "white";
