@@ -615,22 +615,6 @@ double WindowAdjustment::AccumulateCurvature(Eigen::VectorXd* rhs, long long* co
     if (crease_vertex_[v]) {  // creases are meant to bend
       if (!sectors.empty()) {
         for (const SectorRing& sector : sectors[v]) add(v, sector.normal, sector.ring, 0.0);
-      } else if (options_.regularisation == Regularisation::kCurvature) {
-        // A straight crease (ridge, eave) through the vertex: its curvature along the
-        // crease line is minimised like the surface's elsewhere. Not at corners and not
-        // on crease paths that turn (a zigzag of edges across a skew ridge).
-        const auto vh = mesh_->vertex_handle(static_cast<int>(v));
-        std::vector<int> line;
-        for (auto heh : mesh_->voh_range(vh)) {
-          if (crease_edges_[mesh_->edge_handle(heh).idx()]) line.push_back(mesh_->to_vertex_handle(heh).idx());
-        }
-        if (line.size() == 2) {
-          const Eigen::Vector3d x = ToEigen(mesh_->point(vh));
-          const Eigen::Vector3d a = (ToEigen(mesh_->point(mesh_->vertex_handle(line[0]))) - x).normalized();
-          const Eigen::Vector3d b = (ToEigen(mesh_->point(mesh_->vertex_handle(line[1]))) - x).normalized();
-          constexpr double kMaxTurnDeg = 15.0;
-          if (a.dot(b) < -std::cos(kMaxTurnDeg * M_PI / 180.0)) add(v, ToEigen(mesh_->normal(vh)), line, 0.0);
-        }
       }
       continue;
     }

@@ -48,7 +48,12 @@ TEST(ProductsReconstruction, SeedGableOrthophotoAndDsmMatchTruth) {
   options.progress = [](const std::string& line) { std::cout << line << "\n"; };
   const Reconstruction r = Reconstruct(block, options);
   ASSERT_FALSE(r.report.levels.empty());
-  EXPECT_TRUE(r.report.levels.back().window.converged);
+  // Stopped by the break-off or the stall rule (a ridge vertex of one window keeps
+  // moving at constant sigma0, tests/reconstruct_test.cc), not by the iteration cap.
+  for (const WindowReport& w : r.report.levels.back().windows) {
+    EXPECT_TRUE(w.converged || w.stalled);
+    EXPECT_LT(w.iterations.size(), static_cast<size_t>(AdjustmentOptions().max_iterations));
+  }
 
   // The scene's ground pixel (what --raster-pixel gives): both rasters and the ROI
   // grid below then lie on one lattice (RasterGrid::Covering snaps to multiples of it).

@@ -38,9 +38,17 @@ void ReconstructSeedGable(double break_off_gsd, const std::string& name) {
                                               : 0.01 * std::pow(2.0, level.level);
     EXPECT_NEAR(level.break_off, expected, 1e-12) << "level " << level.level;
   }
-  const WindowReport& finest = r.report.levels.back().window;
-  EXPECT_TRUE(finest.converged);
-  EXPECT_LT(finest.sigma0, 6.0);
+  // Every finest window stops by the break-off or by the stall rule, none at the
+  // iteration cap. Since rounded ridges are found (docs/ENGINE.md, Creases) the fit is
+  // much closer (sigma0 4.1-4.2 against 4.4-5.0), but in one of the four windows a
+  // ridge vertex keeps moving by 0.06-0.10 m per iteration at constant sigma0 and the
+  // stall rule stops it (docs/EXPERIMENTS.md, seed 000).
+  const LevelReport& finest_level = r.report.levels.back();
+  for (const WindowReport& w : finest_level.windows) {
+    EXPECT_TRUE(w.converged || w.stalled);
+    EXPECT_LT(w.iterations.size(), static_cast<size_t>(AdjustmentOptions().max_iterations));
+  }
+  EXPECT_LT(finest_level.window.sigma0, 4.5);
 
   MeshData surface;
   surface.vertices = r.tessellation.points;
