@@ -53,6 +53,7 @@ struct ReconstructArgs {
   double closed_lifting_range = ClosedStartOptions().lifting_range;
   VisualHullOptions visual_hull;
   bool no_hull_clamp = false;
+  bool no_hull_rims = false;
   double background_below = AdjustmentOptions().background_below;
   // None: 2 and 5 for closed starts (pixels past a silhouette see the background),
   // off otherwise.
@@ -138,6 +139,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.closed.lifting_range = args.closed_lifting_range;
   options.closed.visual_hull = args.visual_hull;
   options.closed.hull_clamp = !args.no_hull_clamp;
+  options.closed.hull_rims = !args.no_hull_rims;
   options.closed.write_start = (std::filesystem::path(args.out) / "start.ply").string();
   options.adjustment.background_below = args.background_below;
   const bool closed = options.start_closed || !args.start_mesh.empty();
@@ -257,6 +259,8 @@ void AddReconstructCommand(CLI::App& app) {
                   "visual-hull start: images that may see background at a kept voxel")->capture_default_str();
   sub->add_flag("--no-hull-clamp", args->no_hull_clamp,
                 "visual-hull start: let the surface leave the hull (no silhouette constraint)");
+  sub->add_flag("--no-hull-rims", args->no_hull_rims,
+                "visual-hull start: do not push the surface out onto the hull's rims");
   sub->add_option("--closed-lifting-range", args->closed_lifting_range,
                   "object lifting of a closed start: scale factors over 1 +- range/2")->capture_default_str();
   sub->add_option("--background-below", args->background_below,

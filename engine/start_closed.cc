@@ -220,6 +220,10 @@ void ClosedStartOptions::Check() const {
   if (!(hull_inflate >= 0.0 && hull_inflate < 1.0)) {
     throw std::invalid_argument("closed start: hull_inflate must lie in [0, 1)");
   }
+  if (!(hull_rim_edges >= 0.0)) throw std::invalid_argument("closed start: hull_rim_edges must be >= 0");
+  if (!(hull_rim_cos >= 0.0 && hull_rim_cos <= 1.0)) {
+    throw std::invalid_argument("closed start: hull_rim_cos must lie in [0, 1]");
+  }
   if (lifting_steps < 0) throw std::invalid_argument("closed start: lifting_steps must be >= 0");
   if (lifting_steps > 0 && !(lifting_range > 0.0 && lifting_range < 1.8)) {
     throw std::invalid_argument("closed start: lifting_range (scale range) must lie in (0, 1.8)");
@@ -260,7 +264,9 @@ ClosedStart PrepareClosedStart(const ImageBlock& block, const RegionOfInterest& 
   if (options.shape == "visual-hull") {
     const Eigen::Vector3d grow = options.visual_hull_grow * (roi.max - roi.min);
     const Eigen::AlignedBox3d box(roi.min - grow, roi.max + grow);
-    start.visual_hull = CarveVisualHull(block, box, options.visual_hull);
+    start.hull_views = ReadHullViews(block, options.visual_hull.foreground);
+    const HullViews& views = *start.hull_views;
+    start.visual_hull = CarveVisualHull(views.cameras, views.cam_from_world, views.masks, box, options.visual_hull);
     if (start.visual_hull->Count() == 0) {
       throw std::runtime_error(
           "closed start: no voxel of the region projects into the foreground of every image "
@@ -433,6 +439,22 @@ int ClampToVisualHull(const ClosedStart& start, double max_move, TinMesh* mesh, 
   if (unresolved) *unresolved = stuck;
   int moved = 0;
   for (size_t k = 0; k < points.size(); ++k) moved += points[k] != before[k] ? 1 : 0;
+  if (moved > 0) {
+    for (auto vh : mesh->vertices()) mesh->set_point(vh, ToOpenMesh(points[vh.idx()]));
+    UpdateVertexNormals(mesh);
+  }
+  return moved;
+}
+
+int PushOntoVisualHullRims(const ClosedStart& start, double max_move, double max_cos, TinMesh* mesh) {
+  if (!start.visual_hull || !start.hull_views) return 0;
+  const HullOccupancy occupancy = SmoothHullOccupancy(*start.visual_hull);
+  std::vector<Eigen::Vector3d> points, normals;
+  for (auto vh : mesh->vertices()) {
+    points.push_back(ToEigen(mesh->point(vh)));
+    normals.push_back(ToEigen(mesh->normal(vh)));
+  }
+  const int moved = PushOntoHullRims(occupancy, *start.hull_views, normals, max_move, max_cos, &points);
   if (moved > 0) {
     for (auto vh : mesh->vertices()) mesh->set_point(vh, ToOpenMesh(points[vh.idx()]));
     UpdateVertexNormals(mesh);

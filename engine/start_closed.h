@@ -72,6 +72,13 @@ struct ClosedStartOptions {
   // observation, so nothing else stops the surface from swelling past the silhouettes.
   bool hull_clamp = true;
   double hull_clamp_edges = 2.0;
+  // And outward (PushOntoHullRims): vertices inside whose outward normal meets the hull
+  // within hull_rim_edges edge lengths where an image sees the surface edge-on
+  // (|normal . ray| <= hull_rim_cos) and background just beyond are moved onto the hull:
+  // the object touches its hull along the rims, and nothing else pulls the outline out.
+  bool hull_rims = true;
+  double hull_rim_edges = 1.0;
+  double hull_rim_cos = 0.5;
   // When not empty, the start mesh (after object lifting) is written here as PLY.
   std::string write_start;
   // Object lifting: scale factors over 1 +- range / 2 in `steps` steps; 0 steps = off.
@@ -88,6 +95,7 @@ struct ClosedStart {
   std::optional<TinMesh> given;       // start mesh file
   std::vector<Eigen::Vector3d> hull_points;  // shape "hull": the fit's inliers
   std::optional<VisualHullGrid> visual_hull;  // shape "visual-hull"
+  std::optional<HullViews> hull_views;        // the masks it was carved from
   std::string Describe() const;
 };
 
@@ -110,5 +118,9 @@ TinMesh MakeClosedStartMesh(const ClosedStart& start, const ClosedStartOptions& 
 // updated); nothing when the start is no visual hull. Returns the vertices moved;
 // *unresolved: vertices outside with no inside position within max_move.
 int ClampToVisualHull(const ClosedStart& start, double max_move, TinMesh* mesh, int* unresolved);
+
+// The outward half (ClosedStartOptions::hull_rims) on `mesh` (vertex normals updated);
+// nothing when the start is no visual hull. Returns the vertices moved.
+int PushOntoVisualHullRims(const ClosedStart& start, double max_move, double max_cos, TinMesh* mesh);
 
 }  // namespace facets
