@@ -482,7 +482,8 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       const std::vector<bool> creases = DetectCreaseEdges(mesh, options.adjustment.crease_angle_deg);
       if (options.closed.hull_clamp) {
         level_report.hull_clamped = ClampToVisualHull(
-            *closed, options.closed.hull_clamp_edges * edge_length(level), &mesh, &level_report.hull_unresolved);
+            *closed, options.closed.hull_clamp_edges * edge_length(level), &mesh, &level_report.hull_unresolved,
+            options.closed.clamp_guard);
       }
       if (options.closed.hull_rims) {
         level_report.hull_rim_pushed = PushOntoVisualHullRims(

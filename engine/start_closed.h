@@ -77,8 +77,14 @@ struct ClosedStartOptions {
   // (|normal . ray| <= hull_rim_cos) and background just beyond are moved onto the hull:
   // the object touches its hull along the rims, and nothing else pulls the outline out.
   bool hull_rims = true;
+  // Voxel edge of the hull these constraints use (0 = the start's hull): a finer hull
+  // keeps thin parts the start's 3x3x3-blurred voxels erode, without the mesher
+  // following its detail on the coarsest level.
+  double constraint_voxel = 0.0;
+  // The inward pull halved, at last undone, where it folds a face or makes faces cross.
+  bool clamp_guard = false;
   double hull_rim_edges = 1.0;
-  double hull_rim_cos = 0.5;
+  double hull_rim_cos = 0.15;
   // When not empty, the start mesh (after object lifting) is written here as PLY.
   std::string write_start;
   // Object lifting: scale factors over 1 +- range / 2 in `steps` steps; 0 steps = off.
@@ -96,6 +102,10 @@ struct ClosedStart {
   std::vector<Eigen::Vector3d> hull_points;  // shape "hull": the fit's inliers
   std::optional<VisualHullGrid> visual_hull;  // shape "visual-hull"
   std::optional<HullViews> hull_views;        // the masks it was carved from
+  std::optional<VisualHullGrid> constraint_hull;  // finer, ClosedStartOptions::constraint_voxel
+  const VisualHullGrid* ConstraintHull() const {
+    return constraint_hull ? &*constraint_hull : visual_hull ? &*visual_hull : nullptr;
+  }
   std::string Describe() const;
 };
 
@@ -117,10 +127,13 @@ TinMesh MakeClosedStartMesh(const ClosedStart& start, const ClosedStartOptions& 
 // The silhouette constraint (ClosedStartOptions::hull_clamp) on `mesh` (vertex normals
 // updated); nothing when the start is no visual hull. Returns the vertices moved;
 // *unresolved: vertices outside with no inside position within max_move.
-int ClampToVisualHull(const ClosedStart& start, double max_move, TinMesh* mesh, int* unresolved);
+// guard: pulls that fold a face or make two faces cross are halved, at last undone.
+int ClampToVisualHull(const ClosedStart& start, double max_move, TinMesh* mesh, int* unresolved,
+                      bool guard = false);
 
 // The outward half (ClosedStartOptions::hull_rims) on `mesh` (vertex normals updated);
-// nothing when the start is no visual hull. Returns the vertices moved.
+// nothing when the start is no visual hull. Pushes that fold a face or make two faces
+// cross are halved, at last undone (LimitFoldingSteps). Returns the vertices moved.
 int PushOntoVisualHullRims(const ClosedStart& start, double max_move, double max_cos, TinMesh* mesh);
 
 }  // namespace facets
