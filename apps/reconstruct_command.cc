@@ -53,7 +53,7 @@ struct ReconstructArgs {
   double closed_lifting_range = ClosedStartOptions().lifting_range;
   VisualHullOptions visual_hull;
   bool no_hull_clamp = false;
-  bool no_hull_rims = false;
+  bool hull_rims = false;
   bool clamp_guard = false;
   double constraint_voxel = 0.0;
   double hull_rim_cos = ClosedStartOptions().hull_rim_cos;
@@ -143,7 +143,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.closed.lifting_range = args.closed_lifting_range;
   options.closed.visual_hull = args.visual_hull;
   options.closed.hull_clamp = !args.no_hull_clamp;
-  options.closed.hull_rims = !args.no_hull_rims;
+  options.closed.hull_rims = args.hull_rims;
   options.closed.clamp_guard = args.clamp_guard;
   options.closed.constraint_voxel = args.constraint_voxel;
   options.closed.hull_rim_cos = args.hull_rim_cos;
@@ -276,8 +276,8 @@ void AddReconstructCommand(CLI::App& app) {
                   "visual-hull start: farthest push onto a rim, in edge lengths")->capture_default_str();
   sub->add_flag("--hull-clamp-guard", args->clamp_guard,
                 "visual-hull start: halve, at last undo, pulls inside the hull that fold or cross faces");
-  sub->add_flag("--no-hull-rims", args->no_hull_rims,
-                "visual-hull start: do not push the surface out onto the hull's rims");
+  sub->add_flag("--hull-rims", args->hull_rims,
+                "visual-hull start: push the surface out onto the hull's rims after each level");
   sub->add_option("--closed-lifting-range", args->closed_lifting_range,
                   "object lifting of a closed start: scale factors over 1 +- range/2")->capture_default_str();
   sub->add_option("--background-below", args->background_below,
