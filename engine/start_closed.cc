@@ -278,6 +278,7 @@ ClosedStart PrepareClosedStart(const ImageBlock& block, const RegionOfInterest& 
       fine.voxel_size = options.constraint_voxel;
       start.constraint_hull = CarveVisualHull(views.cameras, views.cam_from_world, views.masks, box, fine);
     }
+    if (!options.hull_rims) start.hull_views.reset();  // one byte per pixel and image: only the rims need them
     if (start.visual_hull->Count() == 0) {
       throw std::runtime_error(
           "closed start: no voxel of the region projects into the foreground of every image "

@@ -107,7 +107,7 @@ struct ClosedStart {
   std::optional<TinMesh> given;       // start mesh file
   std::vector<Eigen::Vector3d> hull_points;  // shape "hull": the fit's inliers
   std::optional<VisualHullGrid> visual_hull;  // shape "visual-hull"
-  std::optional<HullViews> hull_views;        // the masks it was carved from
+  std::optional<HullViews> hull_views;        // the masks it was carved from (kept for hull_rims)
   std::optional<VisualHullGrid> constraint_hull;  // finer, ClosedStartOptions::constraint_voxel
   const VisualHullGrid* ConstraintHull() const {
     return constraint_hull ? &*constraint_hull : visual_hull ? &*visual_hull : nullptr;
