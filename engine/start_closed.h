@@ -87,7 +87,8 @@ struct ClosedStartOptions {
   // The inward pull halved, at last undone, where it folds a face or makes faces cross.
   // Off by default: on the synthetic blob the undone pulls leave spikes outside the hull
   // (71 vertices, IoU min 0.895, p90 1.7 GSD); on the temple it takes the crossing pairs
-  // left from 45-83 to 0 with the rim push and the fine constraint hull.
+  // left from 45-83 to 0 with the rim push and the fine constraint hull in 2 of 3 runs
+  // (146 in the third).
   bool clamp_guard = false;
   double hull_rim_edges = 1.0;
   double hull_rim_cos = 0.5;
