@@ -58,6 +58,11 @@ struct ReconstructArgs {
   double closed_lifting_range = ClosedStartOptions().lifting_range;
   VisualHullOptions visual_hull;
   bool no_hull_clamp = false;
+  bool hull_rims = false;
+  bool clamp_guard = false;
+  double constraint_voxel = 0.0;
+  double hull_rim_cos = ClosedStartOptions().hull_rim_cos;
+  double hull_rim_edges = ClosedStartOptions().hull_rim_edges;
   double background_below = AdjustmentOptions().background_below;
   // None: 2 and 5 for closed starts (pixels past a silhouette see the background),
   // off otherwise.
@@ -145,6 +150,11 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.closed.lifting_range = args.closed_lifting_range;
   options.closed.visual_hull = args.visual_hull;
   options.closed.hull_clamp = !args.no_hull_clamp;
+  options.closed.hull_rims = args.hull_rims;
+  options.closed.clamp_guard = args.clamp_guard;
+  options.closed.constraint_voxel = args.constraint_voxel;
+  options.closed.hull_rim_cos = args.hull_rim_cos;
+  options.closed.hull_rim_edges = args.hull_rim_edges;
   options.closed.write_start = (std::filesystem::path(args.out) / "start.ply").string();
   options.adjustment.background_below = args.background_below;
   const bool closed = options.start_closed || !args.start_mesh.empty();
@@ -271,6 +281,17 @@ void AddReconstructCommand(CLI::App& app) {
                   "visual-hull start: images that may see background at a kept voxel")->capture_default_str();
   sub->add_flag("--no-hull-clamp", args->no_hull_clamp,
                 "visual-hull start: let the surface leave the hull (no silhouette constraint)");
+  sub->add_option("--hull-constraint-voxel", args->constraint_voxel,
+                  "visual-hull start: voxel edge of the hull the surface is held to after each level "
+                  "(m; 0 = the start's hull)")->capture_default_str();
+  sub->add_option("--hull-rim-cos", args->hull_rim_cos,
+                  "visual-hull start: a vertex is on a rim where |normal . ray| <= this")->capture_default_str();
+  sub->add_option("--hull-rim-edges", args->hull_rim_edges,
+                  "visual-hull start: farthest push onto a rim, in edge lengths")->capture_default_str();
+  sub->add_flag("--hull-clamp-guard", args->clamp_guard,
+                "visual-hull start: halve, at last undo, pulls inside the hull that fold or cross faces");
+  sub->add_flag("--hull-rims", args->hull_rims,
+                "visual-hull start: push the surface out onto the hull's rims after each level");
   sub->add_option("--closed-lifting-range", args->closed_lifting_range,
                   "object lifting of a closed start: scale factors over 1 +- range/2")->capture_default_str();
   sub->add_option("--background-below", args->background_below,

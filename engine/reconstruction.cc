@@ -215,6 +215,7 @@ std::string ReconstructionReport::Json() const {
     l["folded_faces"] = level.folded_faces;
     l["hull_clamped"] = level.hull_clamped;
     l["hull_unresolved"] = level.hull_unresolved;
+    l["hull_rim_pushed"] = level.hull_rim_pushed;
     l["self_intersections"] = level.self_intersections;
     l["fold_limited"] = level.fold_limited;
     l["relaxed_unseen"] = level.relaxed;
@@ -485,19 +486,27 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     // Not after the finest level's last adjustment: the products use its tessellation.
     if (level > 0) relax_unseen();
     // Silhouette constraint of a visual-hull start: the surface may not leave the hull.
-    if (closed && closed->visual_hull && options.closed.hull_clamp) {
+    if (closed && closed->visual_hull && (options.closed.hull_clamp || options.closed.hull_rims)) {
       const std::vector<bool> creases = DetectCreaseEdges(mesh, adjustment_options.crease_angle_deg,
                                                           adjustment_options.rounded_ridges);
-      level_report.hull_clamped = ClampToVisualHull(
-          *closed, options.closed.hull_clamp_edges * edge_length(level), &mesh, &level_report.hull_unresolved);
-      if (level == 0 && level_report.hull_clamped > 0) {
+      if (options.closed.hull_clamp) {
+        level_report.hull_clamped = ClampToVisualHull(
+            *closed, options.closed.hull_clamp_edges * edge_length(level), &mesh, &level_report.hull_unresolved,
+            options.closed.clamp_guard);
+      }
+      if (options.closed.hull_rims) {
+        level_report.hull_rim_pushed = PushOntoVisualHullRims(
+            *closed, options.closed.hull_rim_edges * edge_length(level), options.closed.hull_rim_cos, &mesh);
+      }
+      if (level == 0 && level_report.hull_clamped + level_report.hull_rim_pushed > 0) {
         // Same topology and creases: only the products' surface points move.
         UpdateTessellationPoints(BuildPatches(mesh, ComputeCornerNormals(mesh, creases)),
                                  &adjusted.tessellation);
       }
       say("  level " + std::to_string(level) + ": " + std::to_string(level_report.hull_clamped) +
           " vertices pulled inside the visual hull, " + std::to_string(level_report.hull_unresolved) +
-          " outside by more than " + std::to_string(options.closed.hull_clamp_edges) + " edges");
+          " outside by more than " + std::to_string(options.closed.hull_clamp_edges) + " edges, " +
+          std::to_string(level_report.hull_rim_pushed) + " pushed out onto its rims");
     }
     // The untangling counts the crossing pairs it leaves: no second CGAL pass for the report.
     int crossing_left = -1;

@@ -139,6 +139,7 @@ struct LevelReport {
   int relaxed = 0;  // unseen vertices relaxed (ReconstructionOptions::relax_unseen), summed
   int hull_clamped = 0;     // vertices pulled inside the visual hull (ClosedStartOptions::hull_clamp)
   int hull_unresolved = 0;  // outside it and not pulled in
+  int hull_rim_pushed = 0;  // inside it, pushed out onto its rims (ClosedStartOptions::hull_rims)
   int crossing_untangled = 0;  // crossing pairs before the untangling (ReconstructionOptions::untangle)
   int untangle_moved = 0;      // vertices it moved
   double seconds = 0.0;

@@ -9,6 +9,7 @@
 #include "engine/reconstruction.h"
 #include "io/ply_io.h"
 #include "mesh/local_ops.h"
+#include "mesh/surface_validity.h"
 
 namespace facets {
 namespace {
@@ -220,6 +221,11 @@ void ClosedStartOptions::Check() const {
   if (!(hull_inflate >= 0.0 && hull_inflate < 1.0)) {
     throw std::invalid_argument("closed start: hull_inflate must lie in [0, 1)");
   }
+  if (!(constraint_voxel >= 0.0)) throw std::invalid_argument("closed start: constraint_voxel must be >= 0");
+  if (!(hull_rim_edges >= 0.0)) throw std::invalid_argument("closed start: hull_rim_edges must be >= 0");
+  if (!(hull_rim_cos >= 0.0 && hull_rim_cos <= 1.0)) {
+    throw std::invalid_argument("closed start: hull_rim_cos must lie in [0, 1]");
+  }
   if (lifting_steps < 0) throw std::invalid_argument("closed start: lifting_steps must be >= 0");
   if (lifting_steps > 0 && !(lifting_range > 0.0 && lifting_range < 1.8)) {
     throw std::invalid_argument("closed start: lifting_range (scale range) must lie in (0, 1.8)");
@@ -232,6 +238,10 @@ std::string ClosedStart::Describe() const {
     out << "closed start: visual hull of " << visual_hull->Count() << " voxels of "
         << visual_hull->voxel << " m (grid " << visual_hull->size.transpose() << "), volume "
         << visual_hull->Volume() << ", centre " << centre.transpose();
+    if (constraint_hull) {
+      out << "; constraint hull of " << constraint_hull->Count() << " voxels of " << constraint_hull->voxel
+          << " m, volume " << constraint_hull->Volume();
+    }
   } else if (given) {
     out << "closed start from the given mesh: " << given->n_vertices() << " vertices, "
         << given->n_faces() << " faces, centre " << centre.transpose();
@@ -260,7 +270,15 @@ ClosedStart PrepareClosedStart(const ImageBlock& block, const RegionOfInterest& 
   if (options.shape == "visual-hull") {
     const Eigen::Vector3d grow = options.visual_hull_grow * (roi.max - roi.min);
     const Eigen::AlignedBox3d box(roi.min - grow, roi.max + grow);
-    start.visual_hull = CarveVisualHull(block, box, options.visual_hull);
+    start.hull_views = ReadHullViews(block, options.visual_hull.foreground);
+    const HullViews& views = *start.hull_views;
+    start.visual_hull = CarveVisualHull(views.cameras, views.cam_from_world, views.masks, box, options.visual_hull);
+    if (options.constraint_voxel > 0.0) {
+      VisualHullOptions fine = options.visual_hull;
+      fine.voxel_size = options.constraint_voxel;
+      start.constraint_hull = CarveVisualHull(views.cameras, views.cam_from_world, views.masks, box, fine);
+    }
+    if (!options.hull_rims) start.hull_views.reset();  // one byte per pixel and image: only the rims need them
     if (start.visual_hull->Count() == 0) {
       throw std::runtime_error(
           "closed start: no voxel of the region projects into the foreground of every image "
@@ -395,10 +413,10 @@ TinMesh MakeClosedStartMesh(const ClosedStart& start, const ClosedStartOptions& 
   return finish(Scaled(mesh, start.centre, scale));
 }
 
-int ClampToVisualHull(const ClosedStart& start, double max_move, TinMesh* mesh, int* unresolved) {
+int ClampToVisualHull(const ClosedStart& start, double max_move, TinMesh* mesh, int* unresolved, bool guard) {
   if (unresolved) *unresolved = 0;
   if (!start.visual_hull) return 0;
-  const HullOccupancy occupancy = SmoothHullOccupancy(*start.visual_hull);
+  const HullOccupancy occupancy = SmoothHullOccupancy(*start.ConstraintHull());
   std::vector<Eigen::Vector3d> points, normals;
   for (auto vh : mesh->vertices()) {
     points.push_back(ToEigen(mesh->point(vh)));
@@ -435,8 +453,32 @@ int ClampToVisualHull(const ClosedStart& start, double max_move, TinMesh* mesh, 
   for (size_t k = 0; k < points.size(); ++k) moved += points[k] != before[k] ? 1 : 0;
   if (moved > 0) {
     for (auto vh : mesh->vertices()) mesh->set_point(vh, ToOpenMesh(points[vh.idx()]));
+    if (guard) {
+      LimitFoldingSteps(mesh, before);
+      moved = 0;
+      for (auto vh : mesh->vertices()) moved += ToEigen(mesh->point(vh)) != before[vh.idx()] ? 1 : 0;
+    }
     UpdateVertexNormals(mesh);
   }
+  return moved;
+}
+
+int PushOntoVisualHullRims(const ClosedStart& start, double max_move, double max_cos, TinMesh* mesh) {
+  if (!start.visual_hull || !start.hull_views) return 0;
+  const HullOccupancy occupancy = SmoothHullOccupancy(*start.ConstraintHull());
+  std::vector<Eigen::Vector3d> points, normals;
+  for (auto vh : mesh->vertices()) {
+    points.push_back(ToEigen(mesh->point(vh)));
+    normals.push_back(ToEigen(mesh->normal(vh)));
+  }
+  const std::vector<Eigen::Vector3d> before = points;
+  if (PushOntoHullRims(occupancy, *start.hull_views, normals, max_move, max_cos, &points) == 0) return 0;
+  for (auto vh : mesh->vertices()) mesh->set_point(vh, ToOpenMesh(points[vh.idx()]));
+  // Pushes that fold a face or make two faces cross are halved and at last undone.
+  LimitFoldingSteps(mesh, before);
+  int moved = 0;
+  for (auto vh : mesh->vertices()) moved += ToEigen(mesh->point(vh)) != before[vh.idx()] ? 1 : 0;
+  UpdateVertexNormals(mesh);
   return moved;
 }
 

@@ -144,26 +144,30 @@ VisualHullGrid CarveVisualHull(const std::vector<Camera>& cameras,
   return grid;
 }
 
-VisualHullGrid CarveVisualHull(const ImageBlock& block, const Eigen::AlignedBox3d& box,
-                               const VisualHullOptions& options) {
-  options.Check();
-  std::vector<Camera> cameras;
-  std::vector<Rigid3d> poses;
-  std::vector<PixelMask> masks;
+HullViews ReadHullViews(const ImageBlock& block, const ForegroundOptions& foreground) {
+  foreground.Check();
+  HullViews views;
   for (const BlockImage& image : block.images) {
     if (image.path.empty()) {
       throw std::runtime_error("visual hull: image " + image.name + " has no file");
     }
     const Camera& camera = block.CameraOf(image);
     try {
-      masks.push_back(ForegroundMask(ReadImageFor(image.path, camera), options.foreground));
+      views.masks.push_back(ForegroundMask(ReadImageFor(image.path, camera), foreground));
     } catch (const std::exception& e) {
       throw std::runtime_error("visual hull: " + image.path + ": " + e.what());
     }
-    cameras.push_back(camera);
-    poses.push_back(image.cam_from_world);
+    views.cameras.push_back(camera);
+    views.cam_from_world.push_back(image.cam_from_world);
   }
-  return CarveVisualHull(cameras, poses, masks, box, options);
+  return views;
+}
+
+VisualHullGrid CarveVisualHull(const ImageBlock& block, const Eigen::AlignedBox3d& box,
+                               const VisualHullOptions& options) {
+  options.Check();
+  const HullViews views = ReadHullViews(block, options.foreground);
+  return CarveVisualHull(views.cameras, views.cam_from_world, views.masks, box, options);
 }
 
 namespace {
@@ -261,6 +265,66 @@ int PullInsideHull(const HullOccupancy& occupancy, const std::vector<Eigen::Vect
   }
   if (unresolved) *unresolved = stuck;
   return moved;
+}
+
+int PushOntoHullRims(const HullOccupancy& occupancy, const HullViews& views,
+                     const std::vector<Eigen::Vector3d>& directions, double max_move, double max_cos,
+                     std::vector<Eigen::Vector3d>* points) {
+  if (directions.size() != points->size()) {
+    throw std::invalid_argument("PushOntoHullRims: one direction per point needed");
+  }
+  if (views.cameras.size() != views.masks.size() || views.cam_from_world.size() != views.masks.size()) {
+    throw std::invalid_argument("PushOntoHullRims: one camera, pose and mask per image needed");
+  }
+  std::vector<Eigen::Vector3d> centres;
+  for (const Rigid3d& pose : views.cam_from_world) centres.push_back(pose.Inverse().translation);
+  const double voxel = occupancy.grid->voxel;
+  const double step = 0.25 * voxel;
+  // Background in image m at x: outside the image or behind the camera counts too.
+  auto background = [&](size_t m, const Eigen::Vector3d& x) {
+    const Eigen::Vector3d c = views.cam_from_world[m] * x;
+    if (!(c.z() > 0.0)) return true;
+    const Eigen::Vector2d p = views.cameras[m].ImageFromCam(c);
+    const int px = static_cast<int>(std::floor(p.x()));
+    const int py = static_cast<int>(std::floor(p.y()));
+    return !(px >= 0 && py >= 0 && px < views.masks[m].width && py < views.masks[m].height &&
+             views.masks[m].at(px, py) != 0);
+  };
+  std::vector<uint8_t> moved(points->size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, points->size()), [&](const auto& range) {
+    for (size_t n = range.begin(); n != range.end(); ++n) {
+      Eigen::Vector3d& p = (*points)[n];
+      if (!occupancy.Inside(p)) continue;
+      const Eigen::Vector3d d = directions[n].normalized();
+      if (!d.allFinite()) continue;
+      double inside = 0.0, outside = -1.0;
+      for (double t = step; t <= max_move + 1e-12; t += step) {
+        if (!occupancy.Inside(p + t * d)) {
+          outside = t;
+          break;
+        }
+        inside = t;
+      }
+      if (outside < 0.0) continue;
+      for (int it = 0; it < 8; ++it) {
+        const double mid = 0.5 * (outside + inside);
+        (occupancy.Inside(p + mid * d) ? inside : outside) = mid;
+      }
+      const Eigen::Vector3d boundary = p + inside * d;
+      const Eigen::Vector3d beyond = boundary + voxel * d;
+      bool rim = false;
+      for (size_t m = 0; m < views.masks.size() && !rim; ++m) {
+        const Eigen::Vector3d ray = (boundary - centres[m]).normalized();
+        rim = std::abs(ray.dot(d)) <= max_cos && background(m, beyond);
+      }
+      if (!rim) continue;
+      p = boundary;
+      moved[n] = 1;
+    }
+  });
+  int count = 0;
+  for (uint8_t m : moved) count += m;
+  return count;
 }
 
 void MeshVisualHull(const VisualHullGrid& grid, double edge_length,

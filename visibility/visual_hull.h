@@ -54,6 +54,16 @@ struct VisualHullGrid {
   double Volume() const { return static_cast<double>(Count()) * voxel * voxel * voxel; }
 };
 
+// The images a hull is carved from: camera, pose and foreground mask per image.
+struct HullViews {
+  std::vector<Camera> cameras;
+  std::vector<Rigid3d> cam_from_world;
+  std::vector<PixelMask> masks;
+};
+
+// The foreground masks of the block's image files (errors name the file).
+HullViews ReadHullViews(const ImageBlock& block, const ForegroundOptions& foreground);
+
 // Carves the grid over `box` with the given foreground masks (one per camera/pose, the
 // camera's size). A voxel centre projecting outside an image or behind it counts as
 // background there. Only the largest 6-connected inside component is kept.
@@ -82,6 +92,17 @@ HullOccupancy SmoothHullOccupancy(const VisualHullGrid& grid);
 // counts points outside with no inside position within max_move (left where they are).
 int PullInsideHull(const HullOccupancy& occupancy, const std::vector<Eigen::Vector3d>& directions,
                    double max_move, std::vector<Eigen::Vector3d>* points, int* unresolved = nullptr);
+
+// Rim attraction, the outward half of the silhouette constraint: an object touches its
+// visual hull along its rims, where an image sees the surface edge-on at its silhouette.
+// A point whose outward direction meets the hull's boundary within max_move is moved
+// out onto the boundary when some image (a) sees background one voxel beyond that
+// boundary point, so the boundary there is that image's silhouette cone, and (b) views
+// the direction edge-on: |direction . viewing ray| <= max_cos. Points outside the hull
+// are left alone (PullInsideHull). Returns the points moved.
+int PushOntoHullRims(const HullOccupancy& occupancy, const HullViews& views,
+                     const std::vector<Eigen::Vector3d>& directions, double max_move, double max_cos,
+                     std::vector<Eigen::Vector3d>* points);
 
 // Closed, manifold triangle mesh of the grid's boundary (CGAL surface mesher on the
 // trilinear occupancy, level 1/2), triangles of about edge_length, normals outward.

@@ -104,6 +104,80 @@ TEST(VisualHull, PointsOutsideArePulledInAlongTheirDirection) {
   for (int n = 40; n < 50; ++n) EXPECT_EQ(points[n], before[n]);
 }
 
+// A sphere of 0.1 m carved from eight views on a ring 20 degrees above its equator;
+// points shrunk to 0.085 m along their radial direction. Those an image sees edge-on
+// (the rim circles of the eight views) are pushed back out onto the hull; the others,
+// points deep inside and points outside stay.
+TEST(VisualHull, PointsOnTheRimsArePushedOutOntoTheHull) {
+  Ellipsoid e;
+  e.radii = Eigen::Vector3d::Constant(0.1);
+  std::vector<Eigen::Vector3d> truth_points;
+  std::vector<Eigen::Vector3i> truth_triangles;
+  TinPointsAndTriangles(MakeEllipsoidMesh(e, 0.004), &truth_points, &truth_triangles);
+  const TriangleScene truth(EmbreeDevice::Shared(), truth_points, truth_triangles);
+  const Camera camera = Camera::Create(CameraModel::kPinhole, 600, 600, 200, 200, 400, 400);
+  HullViews views;
+  std::vector<Eigen::Vector3d> centres;
+  for (int k = 0; k < 8; ++k) {
+    const double azimuth = 2.0 * M_PI * k / 8.0, elevation = 20.0 * M_PI / 180.0;
+    centres.emplace_back(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
+                         std::sin(elevation));
+    views.cameras.push_back(camera);
+    views.cam_from_world.push_back(LookAtOrigin(centres.back()));
+    views.masks.push_back(CoverageMask(truth, camera, views.cam_from_world.back()));
+  }
+  VisualHullOptions options;
+  options.voxel_size = 0.002;
+  const Eigen::AlignedBox3d box(Eigen::Vector3d::Constant(-0.15), Eigen::Vector3d::Constant(0.15));
+  const VisualHullGrid grid = CarveVisualHull(views.cameras, views.cam_from_world, views.masks, box, options);
+  const HullOccupancy occupancy = SmoothHullOccupancy(grid);
+
+  const double max_cos = 0.1;
+  std::vector<Eigen::Vector3d> points, directions;
+  std::vector<bool> rim;
+  for (int n = 0; n < 400; ++n) {  // a spiral over the sphere
+    const double z = -0.95 + 1.9 * n / 399.0, phi = 2.4 * n;
+    const Eigen::Vector3d u(std::sqrt(1 - z * z) * std::cos(phi), std::sqrt(1 - z * z) * std::sin(phi), z);
+    double edge_on = 1.0;
+    for (const Eigen::Vector3d& c : centres) edge_on = std::min(edge_on, std::abs((0.1 * u - c).normalized().dot(u)));
+    points.push_back(0.085 * u);
+    directions.push_back(u);
+    rim.push_back(edge_on <= max_cos);
+  }
+  points.push_back(Eigen::Vector3d(0.02, 0.0, 0.0));  // deep inside: no boundary within reach
+  directions.push_back(Eigen::Vector3d::UnitX());
+  points.push_back(Eigen::Vector3d(0.0, 0.13, 0.0));  // outside: PullInsideHull's business
+  directions.push_back(Eigen::Vector3d::UnitY());
+  const std::vector<Eigen::Vector3d> before = points;
+  const int moved = PushOntoHullRims(occupancy, views, directions, 0.03, max_cos, &points);
+  int rims = 0, pushed_rims = 0, pushed_others = 0;
+  double worst_inside = 0.0, worst_outside = 0.0;
+  for (size_t n = 0; n < rim.size(); ++n) {
+    const bool pushed = points[n] != before[n];
+    rims += rim[n] ? 1 : 0;
+    pushed_rims += rim[n] && pushed ? 1 : 0;
+    pushed_others += !rim[n] && pushed ? 1 : 0;
+    if (pushed) {
+      EXPECT_TRUE(occupancy.Inside(points[n])) << n;
+      worst_inside = std::max(worst_inside, 0.1 - points[n].norm());
+      worst_outside = std::max(worst_outside, points[n].norm() - 0.1);
+    }
+  }
+  EXPECT_EQ(points[400], before[400]);
+  EXPECT_EQ(points[401], before[401]);
+  std::printf("rim push: %d of 400 points on a rim (|cos| <= %.2f), %d of them and %d others pushed "
+              "(%d in all); pushed points %.4f m inside to %.4f m outside the sphere\n",
+              rims, max_cos, pushed_rims, pushed_others, moved, worst_inside, worst_outside);
+  EXPECT_GT(rims, 40);
+  EXPECT_EQ(moved, pushed_rims + pushed_others);
+  EXPECT_GE(pushed_rims, rims * 9 / 10);
+  // A point near the rim but just beyond the band is pushed too when the view's ray at the
+  // hull's boundary (farther out than the point) is still edge-on; never many.
+  EXPECT_LE(pushed_others, rims / 4);
+  EXPECT_LE(worst_inside, grid.voxel);
+  EXPECT_LE(worst_outside, 3.0 * grid.voxel);
+}
+
 TEST(VisualHull, EmptySilhouettesGiveAClearError) {
   const Camera camera = Camera::Create(CameraModel::kPinhole, 300, 300, 100, 100, 200, 200);
   const std::vector<PixelMask> masks(2, PixelMask(200, 200));
