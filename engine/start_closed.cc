@@ -102,6 +102,22 @@ TinMesh Scaled(const TinMesh& start, const Eigen::Vector3d& centre, double scale
   return mesh;
 }
 
+// Vertex positions and normals, by vertex index.
+void PointsAndNormals(const TinMesh& mesh, std::vector<Eigen::Vector3d>* points,
+                      std::vector<Eigen::Vector3d>* normals) {
+  for (auto vh : mesh.vertices()) {
+    points->push_back(ToEigen(mesh.point(vh)));
+    normals->push_back(ToEigen(mesh.normal(vh)));
+  }
+}
+
+// Vertices whose position differs from `before`.
+int CountMoved(const TinMesh& mesh, const std::vector<Eigen::Vector3d>& before) {
+  int moved = 0;
+  for (auto vh : mesh.vertices()) moved += ToEigen(mesh.point(vh)) != before[vh.idx()] ? 1 : 0;
+  return moved;
+}
+
 }  // namespace
 
 Eigen::Vector3d CameraAxesMeet(const ImageBlock& block) {
@@ -418,10 +434,7 @@ int ClampToVisualHull(const ClosedStart& start, double max_move, TinMesh* mesh, 
   if (!start.visual_hull) return 0;
   const HullOccupancy occupancy = SmoothHullOccupancy(*start.ConstraintHull());
   std::vector<Eigen::Vector3d> points, normals;
-  for (auto vh : mesh->vertices()) {
-    points.push_back(ToEigen(mesh->point(vh)));
-    normals.push_back(ToEigen(mesh->normal(vh)));
-  }
+  PointsAndNormals(*mesh, &points, &normals);
   const std::vector<Eigen::Vector3d> before = points;
   int stuck = 0;
   PullInsideHull(occupancy, normals, max_move, &points, &stuck);
@@ -455,8 +468,7 @@ int ClampToVisualHull(const ClosedStart& start, double max_move, TinMesh* mesh, 
     for (auto vh : mesh->vertices()) mesh->set_point(vh, ToOpenMesh(points[vh.idx()]));
     if (guard) {
       LimitFoldingSteps(mesh, before);
-      moved = 0;
-      for (auto vh : mesh->vertices()) moved += ToEigen(mesh->point(vh)) != before[vh.idx()] ? 1 : 0;
+      moved = CountMoved(*mesh, before);
     }
     UpdateVertexNormals(mesh);
   }
@@ -467,17 +479,13 @@ int PushOntoVisualHullRims(const ClosedStart& start, double max_move, double max
   if (!start.visual_hull || !start.hull_views) return 0;
   const HullOccupancy occupancy = SmoothHullOccupancy(*start.ConstraintHull());
   std::vector<Eigen::Vector3d> points, normals;
-  for (auto vh : mesh->vertices()) {
-    points.push_back(ToEigen(mesh->point(vh)));
-    normals.push_back(ToEigen(mesh->normal(vh)));
-  }
+  PointsAndNormals(*mesh, &points, &normals);
   const std::vector<Eigen::Vector3d> before = points;
   if (PushOntoHullRims(occupancy, *start.hull_views, normals, max_move, max_cos, &points) == 0) return 0;
   for (auto vh : mesh->vertices()) mesh->set_point(vh, ToOpenMesh(points[vh.idx()]));
   // Pushes that fold a face or make two faces cross are halved and at last undone.
   LimitFoldingSteps(mesh, before);
-  int moved = 0;
-  for (auto vh : mesh->vertices()) moved += ToEigen(mesh->point(vh)) != before[vh.idx()] ? 1 : 0;
+  const int moved = CountMoved(*mesh, before);
   UpdateVertexNormals(mesh);
   return moved;
 }

@@ -10,12 +10,16 @@
 namespace facets {
 namespace {
 
-Eigen::Vector3d UnitFaceNormal(const TinMesh& mesh, TinMesh::FaceHandle fh) {
+Eigen::Vector3d AreaFaceNormal(const TinMesh& mesh, TinMesh::FaceHandle fh) {
   auto it = mesh.cfv_iter(fh);
   const Eigen::Vector3d p0 = ToEigen(mesh.point(*it));
   const Eigen::Vector3d p1 = ToEigen(mesh.point(*++it));
   const Eigen::Vector3d p2 = ToEigen(mesh.point(*++it));
-  const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
+  return (p1 - p0).cross(p2 - p0);
+}
+
+Eigen::Vector3d UnitFaceNormal(const TinMesh& mesh, TinMesh::FaceHandle fh) {
+  const Eigen::Vector3d n = AreaFaceNormal(mesh, fh);
   const double len = n.norm();
   return len > 0.0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
 }
@@ -31,26 +35,7 @@ std::vector<bool> DetectCreaseEdges(const TinMesh& mesh, double crease_angle_deg
   std::vector<bool> crease(mesh.n_edges(), false);
   if (crease_angle_deg >= 180.0) return crease;
   std::vector<Eigen::Vector3d> face_normal(mesh.n_faces());
-  std::vector<Eigen::Vector3d> area_normal(mesh.n_faces());
-  for (auto fh : mesh.faces()) {
-    auto it = mesh.cfv_iter(fh);
-    const Eigen::Vector3d p0 = ToEigen(mesh.point(*it));
-    const Eigen::Vector3d p1 = ToEigen(mesh.point(*++it));
-    const Eigen::Vector3d p2 = ToEigen(mesh.point(*++it));
-    area_normal[fh.idx()] = (p1 - p0).cross(p2 - p0);
-    const double len = area_normal[fh.idx()].norm();
-    face_normal[fh.idx()] = len > 0.0 ? Eigen::Vector3d(area_normal[fh.idx()] / len) : Eigen::Vector3d::Zero();
-  }
-  // Area-weighted vertex normals of the current geometry (the mesh's stored normals
-  // may be a step behind).
-  std::vector<Eigen::Vector3d> vertex_normal(mesh.n_vertices(), Eigen::Vector3d::Zero());
-  for (auto fh : mesh.faces()) {
-    for (auto vh : mesh.fv_range(fh)) vertex_normal[vh.idx()] += area_normal[fh.idx()];
-  }
-  for (auto& n : vertex_normal) {
-    const double len = n.norm();
-    if (len > 0.0) n /= len;
-  }
+  for (auto fh : mesh.faces()) face_normal[fh.idx()] = UnitFaceNormal(mesh, fh);
   const double cos_crease = std::cos(crease_angle_deg * M_PI / 180.0);
   const double cos_half = std::cos(0.5 * crease_angle_deg * M_PI / 180.0);
   std::vector<double> cos_dihedral(mesh.n_edges(), 1.0);
@@ -62,6 +47,17 @@ std::vector<bool> DetectCreaseEdges(const TinMesh& mesh, double crease_angle_deg
     crease[eh.idx()] = cos_dihedral[eh.idx()] < cos_crease;
   }
   if (!rounded_ridges) return crease;
+  // Area-weighted vertex normals of the current geometry (the mesh's stored normals
+  // may be a step behind).
+  std::vector<Eigen::Vector3d> vertex_normal(mesh.n_vertices(), Eigen::Vector3d::Zero());
+  for (auto fh : mesh.faces()) {
+    const Eigen::Vector3d area_normal = AreaFaceNormal(mesh, fh);
+    for (auto vh : mesh.fv_range(fh)) vertex_normal[vh.idx()] += area_normal;
+  }
+  for (auto& n : vertex_normal) {
+    const double len = n.norm();
+    if (len > 0.0) n /= len;
+  }
   // A ridge the regularisation has rounded over two or three rows of edges: no single
   // edge reaches the crease angle, but the bend across the edge's band does. The band
   // is measured between the vertex normals of the two opposite corners (each averages
