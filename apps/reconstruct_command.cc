@@ -34,6 +34,7 @@ constexpr double kClosedRejectK = 5.0;
 struct ReconstructArgs {
   std::string colmap, images, project, out;
   int levels = 3;
+  double facet_pixels = ReconstructionOptions().facet_pixels;
   double lambda = AdjustmentOptions().lambda;
   std::string regularisation = "curvature";
   // Real photographs need "linear" (docs/EXPERIMENTS.md, fountain); the default stays "none"
@@ -46,6 +47,8 @@ struct ReconstructArgs {
   std::optional<double> break_off;  // m; none: 0.06 ground pixel of each level
   int max_iterations = AdjustmentOptions().max_iterations;
   double crease_angle = AdjustmentOptions().crease_angle_deg;
+  double min_cos_incidence = AdjustmentOptions().min_cos_incidence;
+  double min_view_share = AdjustmentOptions().min_view_share;
   bool no_rounded_ridges = false;
   std::optional<double> start_height;
   std::string start = "auto";
@@ -72,6 +75,7 @@ struct ReconstructArgs {
   int window_margin = WindowPartitionOptions().margin_rings;
   int sweeps = LevelWindowOptions().sweeps;
   int wall_passes = ReconstructionOptions().wall_passes;
+  int tangential_smoothing = ReconstructionOptions().tangential_smoothing;
   std::string displacement = "normal";
   bool no_fold_guard = false;
   bool no_relax_unseen = false;
@@ -113,6 +117,7 @@ void RunReconstruct(const ReconstructArgs& args) {
 
   ReconstructionOptions options;
   options.levels = args.levels;
+  options.facet_pixels = args.facet_pixels;
   options.filter = PyramidFilterFromName(args.filter);
   options.adjustment.lambda = args.lambda;
   options.adjustment.regularisation = RegularisationFromName(args.regularisation);
@@ -126,6 +131,8 @@ void RunReconstruct(const ReconstructArgs& args) {
   }
   options.adjustment.max_iterations = args.max_iterations;
   options.adjustment.crease_angle_deg = args.crease_angle;
+  options.adjustment.min_cos_incidence = args.min_cos_incidence;
+  options.adjustment.min_view_share = args.min_view_share;
   options.adjustment.rounded_ridges = !args.no_rounded_ridges;
   options.start_height = args.start_height;
   // --start closed selects the closed start (engine/start_closed.h); the others are the
@@ -164,6 +171,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.windows.partition.margin_rings = args.window_margin;
   options.windows.sweeps = args.sweeps;
   options.wall_passes = args.wall_passes;
+  options.tangential_smoothing = args.tangential_smoothing;
   options.adjustment.displacement = DisplacementFromName(args.displacement);
   options.adjustment.fold_guard = !args.no_fold_guard;
   options.relax_unseen = !args.no_relax_unseen;
@@ -239,6 +247,9 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--project", args->project, "native project file (JSON)");
   sub->add_option("--out", args->out, "output folder")->required();
   sub->add_option("--levels", args->levels, "image pyramid levels (1 = no pyramid)")->capture_default_str();
+  sub->add_option("--facet-pixels", args->facet_pixels,
+                  "edge of a grey facet in pixels of each level (a triangle edge is 4 facets)")
+      ->capture_default_str();
   sub->add_option("--lambda", args->lambda, "regularisation weight (docs/ENGINE.md)")->capture_default_str();
   sub->add_option("--regularisation", args->regularisation, "curvature | adaptive | none")->capture_default_str();
   sub->add_option("--radiometry", args->radiometry, "none | constant | linear")->capture_default_str();
@@ -255,6 +266,14 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--break-off", args->break_off, "largest displacement at the finest level (m); default 0.06 ground pixel of each level");
   sub->add_option("--max-iterations", args->max_iterations, "per level")->capture_default_str();
   sub->add_option("--crease-angle", args->crease_angle, "crease detection angle (deg); 180 = pure G1")->capture_default_str();
+  sub->add_option("--min-view-share", args->min_view_share,
+                  "an image is a view of a vertex with at least this share of the best image's pixels on its faces "
+                  "(fewer than 2 views: flagged, creases regularised)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  sub->add_option("--min-cos-incidence", args->min_cos_incidence,
+                  "rays meeting a facet at |cos| below this (more grazing) are no observation")
+      ->capture_default_str();
   sub->add_flag("--no-rounded-ridges", args->no_rounded_ridges,
                 "creases only where one edge bends by the crease angle, not the middle of a rounded band (always so for closed starts)");
   sub->add_option("--start-height", args->start_height, "height of the start plane (local Z)");
@@ -304,6 +323,10 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--sweeps", args->sweeps, "sweeps over the windows of a level")->capture_default_str();
   sub->add_option("--wall-passes", args->wall_passes,
                   "per level: split edges walls stretched and adjust again, at most this often")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 10));
+  sub->add_option("--tangential-smoothing", args->tangential_smoothing,
+                  "per finer level: iterations of tangential smoothing on the creased G1 surface (0 = off)")
       ->capture_default_str()
       ->check(CLI::Range(0, 10));
   sub->add_option("--displacement", args->displacement,

@@ -75,6 +75,7 @@ void AdjustmentOptions::Check() const {
     fail("crease_angle_deg must lie in (0, 180]");
   if (!(grey_ridge >= 0.0)) fail("grey_ridge must be >= 0");
   if (min_views < 0) fail("min_views must be >= 0");
+  if (!(min_view_share >= 0.0 && min_view_share <= 1.0)) fail("min_view_share must lie in [0, 1]");
   if (!(max_sigma >= 0.0)) fail("max_sigma must be >= 0");
   if (!(robust_k >= 0.0)) fail("robust_k must be >= 0");
   if (!(reject_k >= 0.0)) fail("reject_k must be >= 0");

@@ -129,6 +129,9 @@ struct AdjustmentOptions {
   // A vertex is flagged undetermined when fewer images than this saw it, or its
   // standard deviation exceeds max_sigma (object units; 0 = no sigma test).
   int min_views = 2;
+  // An image counts as a view of a vertex when it has at least this share of the best
+  // image's pixels on the vertex's faces (0: any pixel; WindowAdjustment::VertexViews).
+  double min_view_share = 0.3;
   double max_sigma = 0.0;
 
   // Throws std::invalid_argument naming the bad option.

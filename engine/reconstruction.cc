@@ -167,6 +167,7 @@ void ReconstructionOptions::Check() const {
   if (lifting_steps < 0) fail("lifting_steps must be >= 0");
   if (!(break_off_gsd >= 0.0)) fail("break_off_gsd must be >= 0");
   if (wall_passes < 0 || wall_passes > 10) fail("wall_passes must lie in 0..10");
+  if (tangential_smoothing < 0 || tangential_smoothing > 10) fail("tangential_smoothing must lie in 0..10");
   if (lifting_steps > 0 && !(lifting_range > 0)) fail("lifting_range must be > 0");
   if (roi && !(roi->max.array() > roi->min.array()).head<2>().all()) {
     fail("region of interest is empty");
@@ -208,6 +209,7 @@ std::string ReconstructionReport::Json() const {
     l["level"] = level.level;
     l["ground_pixel"] = level.ground_pixel;
     l["edge_length"] = level.edge_length;
+    l["smoothed"] = level.smoothed;
     l["break_off"] = level.break_off;
     l["vertices"] = level.vertices;
     l["faces"] = level.faces;
@@ -414,13 +416,13 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
   }
   say("stage start: " + result.report.start_surface + (result.report.start_detail.empty() ? "" : ": " + result.report.start_detail));
   for (int level = coarsest; level >= 0; --level) {
+    int smoothed = 0;
     const auto level_start = std::chrono::steady_clock::now();
     const AdjustmentOptions adjustment_options = level_options(level);
     if (level != coarsest) {
       // One pyramid level down: quaternary subdivision keeps the shape (creases
-      // included), the quality pass splits what walls stretched.
-      // (Tangential smoothing is left out for now: it re-projects onto the plain G1
-      // surface and would round the creases again.)
+      // included), the quality pass splits what walls stretched, tangential smoothing
+      // on the creased G1 surface evens the triangles out.
       const AdjustmentOptions coarser = level_options(level + 1);  // whose creases the mesh has
       mesh = QuaternarySubdivide(
           mesh, ComputeCornerNormals(mesh, coarser.crease_angle_deg, coarser.rounded_ridges));
@@ -431,8 +433,18 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       quality.max_rounds = 2;
       QualityPass(&mesh, quality);
       UpdateVertexNormals(&mesh);
+      if (options.tangential_smoothing > 0) {
+        SmoothingOptions smoothing;
+        smoothing.iterations = options.tangential_smoothing;
+        smoothing.crease_angle_deg = coarser.crease_angle_deg;
+        smoothing.rounded_ridges = coarser.rounded_ridges;
+        smoothing.fix_boundary = true;
+        smoothed = TangentialSmooth(&mesh, smoothing).moved;
+        UpdateVertexNormals(&mesh);
+      }
     }
     LevelReport level_report;
+    level_report.smoothed = smoothed;
     level_report.level = level;
     level_report.ground_pixel = gsd0 * std::pow(2.0, level);
     level_report.edge_length = edge_length(level);
@@ -448,11 +460,12 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     // Vertices no image saw (a sheet folded under a roof that rose) fall back to the
     // membrane spanned by the seen surface around them (mesh/local_ops.h).
     auto relax_unseen = [&]() {
-      if (!options.relax_unseen) return;
+      if (!options.relax_unseen) return 0;
       // A vertex counts as seen when some image sees it within a quarter of an edge.
-      level_report.relaxed +=
-          RelaxUnseenVertices(&mesh, VisibleViews(mesh, block, 0.25 * edge_length(level)));
+      const int relaxed = RelaxUnseenVertices(&mesh, VisibleViews(mesh, block, 0.25 * edge_length(level)));
+      level_report.relaxed += relaxed;
       UpdateVertexNormals(&mesh);
+      return relaxed;
     };
     // Walls that stood up during this adjustment stretched their triangles: split them
     // now and adjust again, so a wall carries vertices at the density of roof and
@@ -483,8 +496,14 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       level_report.wall_passes.push_back(
           {split.splits, split.flips, static_cast<int>(mesh.n_faces()), adjusted.summary.sigma0});
     }
-    // Not after the finest level's last adjustment: the products use its tessellation.
-    if (level > 0) relax_unseen();
+    // After the finest level's last adjustment too (a pocket folded under an eave, seen
+    // by no image, would stay in the products): same topology, so only the products'
+    // surface points move; the grey values there were never observed anyway.
+    if (relax_unseen() > 0 && level == 0) {
+      const std::vector<bool> creases =
+          DetectCreaseEdges(mesh, adjustment_options.crease_angle_deg, adjustment_options.rounded_ridges);
+      UpdateTessellationPoints(BuildPatches(mesh, ComputeCornerNormals(mesh, creases)), &adjusted.tessellation);
+    }
     // Silhouette constraint of a visual-hull start: the surface may not leave the hull.
     if (closed && closed->visual_hull && (options.closed.hull_clamp || options.closed.hull_rims)) {
       const std::vector<bool> creases = DetectCreaseEdges(mesh, adjustment_options.crease_angle_deg,

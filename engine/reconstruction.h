@@ -83,6 +83,11 @@ struct ReconstructionOptions {
   // relaxation of unseen vertices, one pass gave no better walls (completeness 45-52 %
   // vs 48-50 %), 6-10 crossing triangle pairs vs 0, and 2.5x the time (docs/EXPERIMENTS.md).
   int wall_passes = 0;
+  // Tangential smoothing after each level's subdivision and quality pass (issue 6,
+  // DESIGN.md section 5): this many iterations of TangentialSmooth (mesh/local_ops.h)
+  // on the G1 surface with the coarser level's creases, crease vertices held, so the
+  // split and stretched triangles even out without rounding ridges and eaves. 0 = off.
+  int tangential_smoothing = 1;
   // After each adjustment of a level, vertices no image saw move to the membrane
   // spanned by the seen surface around them (RelaxUnseenVertices, mesh/local_ops.h).
   bool relax_unseen = true;
@@ -136,6 +141,7 @@ struct LevelReport {
   int folded_faces = 0;
   int self_intersections = 0;
   int fold_limited = 0;
+  int smoothed = 0;  // vertex moves of the tangential smoothing before the level
   int relaxed = 0;  // unseen vertices relaxed (ReconstructionOptions::relax_unseen), summed
   int hull_clamped = 0;     // vertices pulled inside the visual hull (ClosedStartOptions::hull_clamp)
   int hull_unresolved = 0;  // outside it and not pulled in

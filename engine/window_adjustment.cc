@@ -612,7 +612,11 @@ double WindowAdjustment::AccumulateCurvature(Eigen::VectorXd* rhs, long long* co
   for (size_t v = 0; v < vertex_ring_.size(); ++v) {
     const auto& ring = vertex_ring_[v];
     if (ring.empty()) continue;
-    if (crease_vertex_[v]) {  // creases are meant to bend
+    // Creases are meant to bend, where images say so: a crease vertex fewer than
+    // min_views images see (a wall's foot behind a building, an eave seen once) has no
+    // data to determine it and keeps its curvature pseudo-observation, else it is
+    // held by nothing but the ridge and its sigma says it is arbitrary (issue 7).
+    if (crease_vertex_[v] && vertex_views_[v] >= options_.min_views) {
       if (!sectors.empty()) {
         for (const SectorRing& sector : sectors[v]) add(v, sector.normal, sector.ring, 0.0);
       }
@@ -634,6 +638,45 @@ void WindowAdjustment::SetOccluders(std::vector<Eigen::Vector3d> points,
 Eigen::Vector3d WindowAdjustment::Direction(int v) const {
   if (options_.displacement == Displacement::kVertical) return Eigen::Vector3d::UnitZ();
   return ToEigen(mesh_->normal(mesh_->vertex_handle(v)));
+}
+
+int WindowAdjustment::AddRidge() {
+  // Ridge: keeps unknowns without any observation (grey nodes nobody sees, vertices
+  // outside every view) at their value instead of making N singular.
+  double mean_diag = 0.0;
+  for (int i = 0; i < num_unknowns_; ++i) mean_diag += normal_.Diagonal(i);
+  mean_diag = std::max(mean_diag / std::max(num_unknowns_, 1), 1e-300);
+  int determined = 0;
+  for (int i = 0; i < num_unknowns_; ++i) {
+    const int64_t slot = normal_.diagonal_index()[i];
+    if (normal_.values()[slot] > options_.grey_ridge * mean_diag) ++determined;
+    normal_.values()[slot] += options_.grey_ridge * mean_diag;
+  }
+  return determined;
+}
+
+std::vector<int> WindowAdjustment::VertexViews(const std::vector<std::vector<PixelObservation>>& casts) const {
+  // An image counts as a view of a vertex when its pixels on the faces around the vertex
+  // are at least min_view_share of the best image's: a wall 3-7 degrees off a nadir
+  // image's rays shows 1-2 pixels of its height there, which pins nothing down.
+  const size_t num_images = images_.size();
+  std::vector<int> face_pixels(face_vertices_.size() * num_images, 0);
+  for (size_t k = 0; k < casts.size(); ++k) {
+    for (const PixelObservation& obs : casts[k]) ++face_pixels[static_cast<size_t>(obs.face) * num_images + k];
+  }
+  std::vector<int> views(mesh_->n_vertices(), 0);
+  std::vector<int> pixels(num_images);
+  for (auto vh : mesh_->vertices()) {
+    std::fill(pixels.begin(), pixels.end(), 0);
+    for (auto fh : mesh_->vf_range(vh)) {
+      for (size_t k = 0; k < num_images; ++k) pixels[k] += face_pixels[static_cast<size_t>(fh.idx()) * num_images + k];
+    }
+    const int best = *std::max_element(pixels.begin(), pixels.end());
+    for (size_t k = 0; k < num_images; ++k) {
+      if (pixels[k] > 0 && pixels[k] >= options_.min_view_share * best) ++views[vh.idx()];
+    }
+  }
+  return views;
 }
 
 WindowReport WindowAdjustment::Run() {
@@ -658,7 +701,6 @@ WindowReport WindowAdjustment::Run() {
   const int num_vertices = static_cast<int>(mesh_->n_vertices());
   std::vector<std::vector<PixelObservation>> casts;
   Eigen::VectorXd rhs, solution;
-  std::vector<uint8_t> face_seen;
   const double bounds[3] = {options_.break_off, 2 * options_.break_off, 4 * options_.break_off};
 
   for (int iteration = 1; iteration <= options_.max_iterations; ++iteration) {
@@ -673,6 +715,7 @@ WindowReport WindowAdjustment::Run() {
       throw std::runtime_error("WindowAdjustment: no image sees the window (0 observations)");
     }
     if (grey_.empty() || (iteration == 1 && !grey_given_)) InitialiseGrey(casts);
+    vertex_views_ = VertexViews(casts);
     robust_scale_ = options_.robust_k > 0.0 || options_.reject_k > 0.0 ? RobustScale(casts) : 0.0;
     it.robust_scale = robust_scale_;
 
@@ -680,17 +723,7 @@ WindowReport WindowAdjustment::Run() {
     long long count = 0, pseudo = 0;
     double lpl = Accumulate(casts, &rhs, &count);
     lpl += AccumulateCurvature(&rhs, &pseudo);
-    // Ridge: keeps unknowns without any observation (grey nodes nobody sees, vertices
-    // outside every view) at their value instead of making N singular.
-    double mean_diag = 0.0;
-    for (int i = 0; i < num_unknowns_; ++i) mean_diag += normal_.Diagonal(i);
-    mean_diag = std::max(mean_diag / std::max(num_unknowns_, 1), 1e-300);
-    int determined = 0;
-    for (int i = 0; i < num_unknowns_; ++i) {
-      const int64_t slot = normal_.diagonal_index()[i];
-      if (normal_.values()[slot] > options_.grey_ridge * mean_diag) ++determined;
-      normal_.values()[slot] += options_.grey_ridge * mean_diag;
-    }
+    const int determined = AddRidge();
     it.seconds_linearise = Seconds(start);
 
     start = std::chrono::steady_clock::now();
@@ -771,23 +804,7 @@ WindowReport WindowAdjustment::Run() {
     }
   }
 
-  // Views per vertex: images with observations on any face around the vertex.
-  const int num_faces = static_cast<int>(face_vertices_.size());
-  face_seen.assign(static_cast<size_t>(num_faces) * images_.size(), 0);
-  for (size_t k = 0; k < casts.size(); ++k) {
-    for (const PixelObservation& obs : casts[k]) face_seen[static_cast<size_t>(obs.face) * images_.size() + k] = 1;
-  }
-  report.vertex_views.assign(num_vertices, 0);
-  for (auto vh : mesh_->vertices()) {
-    for (size_t k = 0; k < images_.size(); ++k) {
-      for (auto fh : mesh_->vf_range(vh)) {
-        if (face_seen[static_cast<size_t>(fh.idx()) * images_.size() + k]) {
-          ++report.vertex_views[vh.idx()];
-          break;
-        }
-      }
-    }
-  }
+  report.vertex_views = VertexViews(casts);
 
   const CorrelatedResiduals correlated = ResidualCorrelation(casts);
   report.residual_rho_x = correlated.rho_x;
@@ -806,6 +823,30 @@ WindowReport WindowAdjustment::Run() {
         ldlt_.factorized() ? ldlt_.InverseDiagonal(geometry) : InverseDiagonal(normal_, geometry);
     for (int v = 0; v < num_vertices; ++v) {
       if (vertex_unknown_[v] >= 0) report.vertex_sigma[v] = report.sigma0 * std::sqrt(report.variance_factor * std::max(q[vertex_unknown_[v]], 0.0));
+    }
+    // A vertex fewer than min_views images see is held by the curvature pseudo-
+    // observations (also on a crease); its formal sigma would report the smoothness
+    // prior as if it had been measured. Its sigma is taken from the data alone, N without
+    // the pseudo-observations, when that is larger (issue 7).
+    std::vector<int> few_view, few_unknowns;
+    for (int v = 0; v < num_vertices; ++v) {
+      if (vertex_unknown_[v] >= 0 && report.vertex_views[v] < options_.min_views) {
+        few_view.push_back(v);
+        few_unknowns.push_back(vertex_unknown_[v]);
+      }
+    }
+    if (!few_view.empty()) {
+      Eigen::VectorXd data_rhs;
+      long long data_count = 0;
+      Accumulate(casts, &data_rhs, &data_count);
+      AddRidge();
+      const Eigen::VectorXd q_data = options_.solver == WindowSolver::kLdlt && ldlt_.Factorize(normal_)
+                                         ? ldlt_.InverseDiagonal(few_unknowns)
+                                         : InverseDiagonal(normal_, few_unknowns);
+      for (size_t i = 0; i < few_view.size(); ++i) {
+        const double q_v = std::max(q[few_unknowns[i]], q_data[i]);
+        report.vertex_sigma[few_view[i]] = report.sigma0 * std::sqrt(report.variance_factor * std::max(q_v, 0.0));
+      }
     }
     report.seconds_precision = Seconds(start);
   }

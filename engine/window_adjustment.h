@@ -163,6 +163,11 @@ class WindowAdjustment {
   double Accumulate(const std::vector<std::vector<PixelObservation>>& casts,
                     Eigen::VectorXd* rhs, long long* count);
   double AccumulateCurvature(Eigen::VectorXd* rhs, long long* count);
+  // Adds the ridge to N's diagonal; returns the unknowns determined beyond it.
+  int AddRidge();
+  // Images with at least min_view_share of the best image's pixels on the faces around
+  // each vertex.
+  std::vector<int> VertexViews(const std::vector<std::vector<PixelObservation>>& casts) const;
   std::vector<double> CurrentCurvatures() const;
   // Unit direction vertex v moves in (AdjustmentOptions::displacement).
   Eigen::Vector3d Direction(int v) const;
@@ -183,6 +188,7 @@ class WindowAdjustment {
   std::vector<Eigen::Vector3i> occluder_triangles_;
   std::vector<bool> crease_edges_;  // by edge, fixed for one Run
   std::vector<bool> crease_vertex_;  // vertices where creases separate face sectors
+  std::vector<int> vertex_views_;    // VertexViews of the current iteration
   std::vector<double> curvature_target_;  // adaptive regularisation, per vertex
   // Robust weighting of the current iteration (0 = off) and what it did.
   double robust_scale_ = 0.0;

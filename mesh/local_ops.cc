@@ -6,6 +6,8 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "mesh/creases.h"
+
 namespace facets {
 namespace {
 
@@ -172,6 +174,7 @@ void SmoothingOptions::Check() const {
   if (!(step > 0.0 && step <= 0.5)) {
     throw std::invalid_argument("SmoothingOptions: step must be in (0, 0.5]");
   }
+  if (!(crease_angle_deg > 0.0)) throw std::invalid_argument("SmoothingOptions: crease_angle_deg must be > 0");
 }
 
 SmoothingReport TangentialSmooth(TinMesh* mesh, const SmoothingOptions& options) {
@@ -180,13 +183,24 @@ SmoothingReport TangentialSmooth(TinMesh* mesh, const SmoothingOptions& options)
   const size_t nv = mesh->n_vertices();
   std::vector<Eigen::Vector3d> new_point(nv), new_normal(nv);
   for (int it = 0; it < options.iterations; ++it) {
-    const std::vector<G1Patch> patches = BuildPatches(*mesh);
+    std::vector<G1Patch> patches;
+    std::vector<int> sectors;
+    if (options.crease_angle_deg < 180.0) {
+      CornerNormals corners =
+          ComputeCornerNormals(*mesh, options.crease_angle_deg, options.rounded_ridges);
+      patches = BuildPatches(*mesh, corners);
+      sectors = std::move(corners.vertex_sectors);
+      report.crease_vertices = corners.num_crease_vertices;
+    } else {
+      patches = BuildPatches(*mesh);
+    }
     for (auto v : mesh->vertices()) {
       const Eigen::Vector3d p = ToEigen(mesh->point(v));
       const Eigen::Vector3d n = ToEigen(mesh->normal(v));
       new_point[v.idx()] = p;
       new_normal[v.idx()] = n;
       if ((options.fix_boundary && mesh->is_boundary(v)) || mesh->valence(v) == 0) continue;
+      if (!sectors.empty() && sectors[v.idx()] > 1) continue;  // on a crease
       Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
       int count = 0;
       for (auto w : mesh->vv_range(v)) {

@@ -44,12 +44,19 @@ struct SmoothingOptions {
   // that surface's normal, so smoothing does not change the shape beyond the
   // interpolation error. false: the vertex stays in its tangent plane.
   bool stay_on_surface = true;
+  // Below 180: creases are detected with this angle (mesh/creases.h) before every
+  // iteration; the surface moved on is the G1 surface with those creases, and crease
+  // vertices stay where they are, so smoothing does not round ridges, eaves and the
+  // feet of walls. 180: the plain G1 surface through the vertex normals.
+  double crease_angle_deg = 180.0;
+  bool rounded_ridges = false;
   void Check() const;
 };
 struct SmoothingReport {
   int moved = 0;             // vertex moves summed over iterations
   double max_move = 0.0;     // largest single move
   int off_surface = 0;       // moves that could not be located in a face
+  int crease_vertices = 0;   // vertices held on creases (last iteration)
 };
 SmoothingReport TangentialSmooth(TinMesh* mesh, const SmoothingOptions& options = {});
 

@@ -143,6 +143,58 @@ TEST(LocalOps, SmoothingKeepsSphere) {
   EXPECT_GT(after.mean_min_angle, before.mean_min_angle);
 }
 
+// A gable roof (ridge along x at y = 0.5, slopes 0.6) on a jittered grid: plain G1
+// smoothing slides the vertices next to the ridge over the rounded G1 surface, off the
+// roof planes; smoothing on the creased surface keeps every vertex on its plane.
+TEST(LocalOps, SmoothingOnCreasedSurfaceKeepsTheRidgeSharp) {
+  auto gable = [](double x, double y) {
+    (void)x;
+    return 2.0 - 0.6 * std::abs(y - 0.5);
+  };
+  auto make = [&]() {
+    StartGridOptions opt;
+    opt.spacing = 0.1;
+    opt.height = gable;
+    TinMesh mesh = MakeStartGrid(opt);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-0.035, 0.035);
+    for (auto v : mesh.vertices()) {
+      if (mesh.is_boundary(v)) continue;
+      const double y0 = mesh.point(v)[1];
+      const double x = mesh.point(v)[0] + u(rng);
+      const double y = std::abs(y0 - 0.5) < 1e-9 ? y0 : y0 + u(rng);  // ridge vertices stay on it
+      mesh.set_point(v, TinMesh::Point(x, y, gable(x, y)));
+    }
+    UpdateVertexNormals(&mesh);
+    return mesh;
+  };
+  auto max_deviation = [&](const TinMesh& mesh) {
+    double m = 0.0;
+    for (auto v : mesh.vertices()) {
+      const auto p = mesh.point(v);
+      m = std::max(m, std::abs(p[2] - gable(p[0], p[1])));
+    }
+    return m;
+  };
+  SmoothingOptions opt;
+  opt.iterations = 3;
+  TinMesh plain = make();
+  TangentialSmooth(&plain, opt);
+  TinMesh creased = make();
+  const AngleStats before = FaceAngleStats(creased);
+  opt.crease_angle_deg = 20.0;
+  const SmoothingReport rep = TangentialSmooth(&creased, opt);
+  const AngleStats after = FaceAngleStats(creased);
+  std::cout << "gable smoothing: max distance to the roof planes, plain G1 " << max_deviation(plain)
+            << " m, creased " << max_deviation(creased) << " m; " << rep.crease_vertices
+            << " crease vertices held; mean min angle " << before.mean_min_angle * 180 / M_PI << " -> "
+            << after.mean_min_angle * 180 / M_PI << " deg\n";
+  EXPECT_GT(max_deviation(plain), 1e-3);
+  EXPECT_LT(max_deviation(creased), 1e-9);
+  EXPECT_EQ(rep.crease_vertices, 11);  // the ridge: x = 0, 0.1, .., 1
+  EXPECT_GT(after.mean_min_angle, before.mean_min_angle);
+}
+
 TEST(LocalOps, SplitEdgeOnG1Surface) {
   TinMesh mesh = testing::SphereCap(0.25);
   const size_t nv = mesh.n_vertices(), nf = mesh.n_faces();

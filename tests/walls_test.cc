@@ -1,9 +1,11 @@
 // Issue 7 guards: a block-scene reconstruction around the 10 x 10 x 4 m flat building,
 // whose walls stand up out of the tie-point start, must come out free of
 // self-intersections (CGAL's predicate on the output TIN) with the fold guard and the
-// wall passes on. Small: 2 levels, a 14 x 14 m region, one sweep.
+// wall passes on, and must flag the wall that only one image sees well. Small: 2
+// levels, a 14 x 14 m region, one sweep.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <iostream>
 
 #include "engine/reconstruction.h"
@@ -14,7 +16,13 @@
 namespace facets {
 namespace {
 
-TEST(Walls, BlockBuildingHasNoSelfIntersections) {
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+TEST(Walls, BlockBuildingIsValidAndFlagsTheWallOneImageSees) {
   const RenderedScene scene = RenderAndRead("scenes/data/block.json", testing::TempDir() + "/facets_walls_block");
   ReconstructionOptions options;
   options.levels = 2;
@@ -46,6 +54,37 @@ TEST(Walls, BlockBuildingHasNoSelfIntersections) {
   double top = -1e300;
   for (const auto& p : points) top = std::max(top, p.z());
   EXPECT_GT(top, 3.0);
+
+  // Views. The south wall (y = -21) faces the southern oblique at 58 degrees and the
+  // southern nadir row at 87 degrees (1-2 pixels of its height): one view. The north
+  // (y = -11) and west (x = 13) walls face an oblique and a nadir row at 66-70 degrees.
+  ASSERT_EQ(r.vertex_views.size(), r.mesh.n_vertices());
+  int south = 0, south_flagged = 0, seen = 0, seen_flagged = 0;
+  std::vector<double> sigma_flagged, sigma_three;
+  for (auto vh : r.mesh.vertices()) {
+    const auto p = r.mesh.point(vh);
+    if (p[2] < 0.7 || p[2] > 3.3) continue;
+    const bool flagged = r.vertex_flags[vh.idx()] & kVertexFewViews;
+    const bool on_south = std::abs(p[1] + 21) < 0.8 && p[0] > 13.8 && p[0] < 22.2;
+    const bool on_seen = (std::abs(p[1] + 11) < 0.8 && p[0] > 13.8 && p[0] < 22.2) ||
+                         (std::abs(p[0] - 13) < 0.8 && p[1] > -20.2 && p[1] < -11.8);
+    if (!on_south && !on_seen) continue;
+    south += on_south;
+    south_flagged += on_south && flagged;
+    seen += on_seen;
+    seen_flagged += on_seen && flagged;
+    if (flagged) sigma_flagged.push_back(r.vertex_sigma[vh.idx()]);
+    if (r.vertex_views[vh.idx()] >= 3) sigma_three.push_back(r.vertex_sigma[vh.idx()]);
+  }
+  std::cout << "south wall: " << south_flagged << " of " << south << " vertices flagged; north and west walls: "
+            << seen_flagged << " of " << seen << "; sigma median flagged " << Median(sigma_flagged) << " m ("
+            << sigma_flagged.size() << "), >= 3 views " << Median(sigma_three) << " m (" << sigma_three.size()
+            << ")\n";
+  ASSERT_GT(south, 3);
+  ASSERT_GT(seen, 6);
+  EXPECT_GT(south_flagged, south / 2);
+  EXPECT_LT(seen_flagged, seen / 4);
+  EXPECT_GT(Median(sigma_flagged), Median(sigma_three));
 }
 
 }  // namespace
