@@ -90,6 +90,11 @@ struct ReconstructionOptions {
   // fold guard only sees one window's step) are untangled by local smoothing of their
   // corners and rings (UntangleSelfIntersections, mesh/surface_validity.h).
   bool untangle = true;
+  // After a level's adjustment, chains of vertices along a straight crease (a ridge
+  // skew to the grid, a zigzag of edges) are put on the crease's line
+  // (StraightenCreaseChains, mesh/creases.h) and the level runs again, kept only when
+  // its sigma0 is lower; at most this many rounds (0 = off). Off for closed starts.
+  int straighten_rounds = 3;
   // Called with one line of progress at a time (stage, level, iteration, sigma0).
   std::function<void(const std::string&)> progress;
 
@@ -142,6 +147,11 @@ struct LevelReport {
   int hull_rim_pushed = 0;  // inside it, pushed out onto its rims (ClosedStartOptions::hull_rims)
   int crossing_untangled = 0;  // crossing pairs before the untangling (ReconstructionOptions::untangle)
   int untangle_moved = 0;      // vertices it moved
+  // ReconstructionOptions::straighten_rounds: level runs after straightening kept and
+  // dropped (the level's report is the last kept run's), vertices moved in the kept ones.
+  int straighten_kept = 0;
+  int straighten_dropped = 0;
+  int straightened = 0;
   double seconds = 0.0;
 };
 
