@@ -72,6 +72,7 @@ struct ReconstructArgs {
   int window_margin = WindowPartitionOptions().margin_rings;
   int sweeps = LevelWindowOptions().sweeps;
   int wall_passes = ReconstructionOptions().wall_passes;
+  int straighten_rounds = ReconstructionOptions().straighten_rounds;
   std::string displacement = "normal";
   bool no_fold_guard = false;
   bool no_relax_unseen = false;
@@ -164,6 +165,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.windows.partition.margin_rings = args.window_margin;
   options.windows.sweeps = args.sweeps;
   options.wall_passes = args.wall_passes;
+  options.straighten_rounds = args.straighten_rounds;
   options.adjustment.displacement = DisplacementFromName(args.displacement);
   options.adjustment.fold_guard = !args.no_fold_guard;
   options.relax_unseen = !args.no_relax_unseen;
@@ -304,6 +306,11 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--sweeps", args->sweeps, "sweeps over the windows of a level")->capture_default_str();
   sub->add_option("--wall-passes", args->wall_passes,
                   "per level: split edges walls stretched and adjust again, at most this often")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 10));
+  sub->add_option("--straighten-rounds", args->straighten_rounds,
+                  "per level: put straight crease chains on their line and adjust again, kept while sigma0 "
+                  "drops, at most this often (0 = off)")
       ->capture_default_str()
       ->check(CLI::Range(0, 10));
   sub->add_option("--displacement", args->displacement,
