@@ -76,6 +76,7 @@ struct ReconstructArgs {
   int sweeps = LevelWindowOptions().sweeps;
   int wall_passes = ReconstructionOptions().wall_passes;
   int tangential_smoothing = ReconstructionOptions().tangential_smoothing;
+  int straighten_rounds = ReconstructionOptions().straighten_rounds;
   std::string displacement = "normal";
   bool no_fold_guard = false;
   bool no_relax_unseen = false;
@@ -172,6 +173,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.windows.sweeps = args.sweeps;
   options.wall_passes = args.wall_passes;
   options.tangential_smoothing = args.tangential_smoothing;
+  options.straighten_rounds = args.straighten_rounds;
   options.adjustment.displacement = DisplacementFromName(args.displacement);
   options.adjustment.fold_guard = !args.no_fold_guard;
   options.relax_unseen = !args.no_relax_unseen;
@@ -327,6 +329,11 @@ void AddReconstructCommand(CLI::App& app) {
       ->check(CLI::Range(0, 10));
   sub->add_option("--tangential-smoothing", args->tangential_smoothing,
                   "per finer level: iterations of tangential smoothing on the creased G1 surface (0 = off)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 10));
+  sub->add_option("--straighten-rounds", args->straighten_rounds,
+                  "per level: put straight crease chains on their line and adjust again, kept while sigma0 "
+                  "drops, at most this often (0 = off)")
       ->capture_default_str()
       ->check(CLI::Range(0, 10));
   sub->add_option("--displacement", args->displacement,

@@ -168,6 +168,7 @@ void ReconstructionOptions::Check() const {
   if (!(break_off_gsd >= 0.0)) fail("break_off_gsd must be >= 0");
   if (wall_passes < 0 || wall_passes > 10) fail("wall_passes must lie in 0..10");
   if (tangential_smoothing < 0 || tangential_smoothing > 10) fail("tangential_smoothing must lie in 0..10");
+  if (straighten_rounds < 0 || straighten_rounds > 10) fail("straighten_rounds must lie in 0..10");
   if (lifting_steps > 0 && !(lifting_range > 0)) fail("lifting_range must be > 0");
   if (roi && !(roi->max.array() > roi->min.array()).head<2>().all()) {
     fail("region of interest is empty");
@@ -223,6 +224,9 @@ std::string ReconstructionReport::Json() const {
     l["relaxed_unseen"] = level.relaxed;
     l["crossing_pairs_untangled"] = level.crossing_untangled;
     l["untangle_moved_vertices"] = level.untangle_moved;
+    l["straighten_passes_kept"] = level.straighten_kept;
+    l["straighten_passes_dropped"] = level.straighten_dropped;
+    l["straightened_vertices"] = level.straightened;
     for (const WallPass& pass : level.wall_passes) {
       l["wall_passes"].push_back({{"splits", pass.splits}, {"flips", pass.flips},
                                   {"faces", pass.faces}, {"sigma0", pass.sigma0}});
@@ -495,6 +499,32 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
                                       level == 0, options.progress);
       level_report.wall_passes.push_back(
           {split.splits, split.flips, static_cast<int>(mesh.n_faces()), adjusted.summary.sigma0});
+    }
+    // A crease skew to the grid (a zigzag of edges): its vertex chains go onto the
+    // crease's line and the level runs again, kept only when it fits better; up to
+    // straighten_rounds times while it does (each round refits the line to the
+    // surface the last one left).
+    for (int round = 0; round < options.straighten_rounds && !closed; ++round) {
+      TinMesh before = mesh;
+      const StraightenReport straight = StraightenCreaseChains(
+          &mesh, DetectCreaseEdges(mesh, adjustment_options.crease_angle_deg, adjustment_options.rounded_ridges));
+      if (straight.moved == 0) break;
+      LevelAdjustment again = AdjustLevelInWindows(&mesh, window_images(level), level_options(level),
+                                                   options.windows, level == 0, options.progress);
+      const bool better = again.summary.sigma0 < adjusted.summary.sigma0;
+      say("  level " + std::to_string(level) + " straightening " + std::to_string(round + 1) + ": " +
+          std::to_string(straight.components) + " straight crease lines, " + std::to_string(straight.moved) +
+          " vertices put on them (max " + std::to_string(straight.max_move) + " m); sigma0 " +
+          std::to_string(again.summary.sigma0) + " against " + std::to_string(adjusted.summary.sigma0) +
+          (better ? ", kept" : ", dropped"));
+      if (!better) {
+        mesh = std::move(before);
+        ++level_report.straighten_dropped;
+        break;
+      }
+      adjusted = std::move(again);
+      ++level_report.straighten_kept;
+      level_report.straightened += straight.moved;
     }
     // After the finest level's last adjustment too (a pocket folded under an eave, seen
     // by no image, would stay in the products): same topology, so only the products'

@@ -3,8 +3,11 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 namespace facets {
@@ -221,6 +224,238 @@ std::vector<G1Patch> BuildPatches(const TinMesh& mesh, const CornerNormals& corn
                       }
                     });
   return patches;
+}
+
+}  // namespace facets
+
+namespace facets {
+
+StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& crease_edge, int min_edges,
+                                        double max_offset) {
+  StraightenReport report;
+  const double crease_min_deg = 10.0;  // the two side planes must meet at least at this angle
+  // The side planes are fitted 1-3 edges from the component's line: nearer than one
+  // edge the regularisation still rounds the crease.
+  const double side_near = 1.0, side_far = 3.0;
+  const int nv = static_cast<int>(mesh->n_vertices());
+  std::vector<int> parent(nv);
+  std::iota(parent.begin(), parent.end(), 0);
+  std::vector<bool> on_crease(nv, false);
+  for (auto eh : mesh->edges()) {
+    if (!crease_edge[eh.idx()]) continue;
+    const int a = mesh->to_vertex_handle(mesh->halfedge_handle(eh, 0)).idx();
+    const int b = mesh->from_vertex_handle(mesh->halfedge_handle(eh, 0)).idx();
+    on_crease[a] = on_crease[b] = true;
+    parent[Find(parent, a)] = Find(parent, b);
+  }
+  // A zigzag's step edges bend less than its runs and may miss the crease angle: crease
+  // vertices joined by any edge belong to one set.
+  for (auto eh : mesh->edges()) {
+    const int a = mesh->to_vertex_handle(mesh->halfedge_handle(eh, 0)).idx();
+    const int b = mesh->from_vertex_handle(mesh->halfedge_handle(eh, 0)).idx();
+    if (on_crease[a] && on_crease[b]) parent[Find(parent, a)] = Find(parent, b);
+  }
+  std::vector<std::vector<int>> members(nv);
+  for (int v = 0; v < nv; ++v) {
+    if (on_crease[v]) members[Find(parent, v)].push_back(v);
+  }
+  std::vector<double> edge_sum(nv, 0.0);
+  std::vector<int> edge_count(nv, 0);
+  for (auto eh : mesh->edges()) {
+    if (!crease_edge[eh.idx()]) continue;
+    const int root = Find(parent, mesh->to_vertex_handle(mesh->halfedge_handle(eh, 0)).idx());
+    edge_sum[root] += mesh->calc_edge_length(eh);
+    ++edge_count[root];
+  }
+  auto point = [&](int v) { return ToEigen(mesh->point(mesh->vertex_handle(v))); };
+  for (int root = 0; root < nv; ++root) {
+    if (edge_count[root] < min_edges) continue;
+    const double h = edge_sum[root] / edge_count[root];
+    // Least-squares line of the component's vertices; vertices farther than the offset
+    // (a branch, the other arm of a corner) are dropped and the line refitted.
+    std::vector<int> kept = members[root];
+    Eigen::Vector3d centre, dir;
+    for (int round = 0; round < 3; ++round) {
+      if (kept.size() < 3) break;
+      centre.setZero();
+      for (int v : kept) centre += point(v);
+      centre /= static_cast<double>(kept.size());
+      Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+      for (int v : kept) scatter += (point(v) - centre) * (point(v) - centre).transpose();
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
+      dir = eig.eigenvectors().col(2);
+      std::vector<int> next;
+      for (int v : kept) {
+        const Eigen::Vector3d d = point(v) - centre;
+        if ((d - d.dot(dir) * dir).norm() <= max_offset * h) next.push_back(v);
+      }
+      if (next.size() == kept.size()) break;
+      kept = std::move(next);
+    }
+    if (kept.size() < 3) continue;
+    auto along = [&](int v) { return (point(v) - centre).dot(dir); };
+    auto off = [&](int v) {
+      const Eigen::Vector3d d = point(v) - centre;
+      return (d - d.dot(dir) * dir).norm();
+    };
+    int first = kept.front();
+    double t_max = along(first);
+    for (int v : kept) {
+      if (along(v) < along(first)) first = v;
+      t_max = std::max(t_max, along(v));
+    }
+    if (t_max - along(first) < min_edges * h * 0.9) continue;
+    const double t_min = along(first);
+    // The vertices of a zigzag lie mostly on one side of the true crease, so their line
+    // is off by up to half an edge: the line is the intersection of the planes fitted to
+    // the surface on either side (1-3 edges away), when they meet within one edge of
+    // it and run within 20 degrees of it.
+    Eigen::Vector3d mean_normal = Eigen::Vector3d::Zero();
+    for (int v : kept) mean_normal += ToEigen(mesh->normal(mesh->vertex_handle(v)));
+    const Eigen::Vector3d side_axis = mean_normal.cross(dir).normalized();
+    std::vector<Eigen::Vector3d> side_points[2];
+    for (auto vh : mesh->vertices()) {
+      const Eigen::Vector3d d = ToEigen(mesh->point(vh)) - centre;
+      const double t = d.dot(dir), s = d.dot(side_axis);
+      if (t < t_min - 0.5 * h || t > t_max + 0.5 * h || std::abs(s) < side_near * h || std::abs(s) > side_far * h) continue;
+      side_points[s > 0.0 ? 1 : 0].push_back(d);
+    }
+    bool planes = side_points[0].size() >= 4 && side_points[1].size() >= 4;
+    Eigen::Vector3d plane_normal[2], plane_centre[2];
+    for (int k = 0; k < 2 && planes; ++k) {
+      plane_centre[k].setZero();
+      for (const auto& q : side_points[k]) plane_centre[k] += q;
+      plane_centre[k] /= static_cast<double>(side_points[k].size());
+      Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+      for (const auto& q : side_points[k]) scatter += (q - plane_centre[k]) * (q - plane_centre[k]).transpose();
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
+      plane_normal[k] = eig.eigenvectors().col(0);
+      // Planar sides only: rms distance to the plane within a tenth of an edge.
+      planes = std::sqrt(std::max(0.0, eig.eigenvalues()(0)) / side_points[k].size()) <= 0.1 * h;
+    }
+    if (!planes) continue;
+    Eigen::Vector3d line_dir = plane_normal[0].cross(plane_normal[1]);
+    if (line_dir.norm() < std::sin(crease_min_deg * M_PI / 180.0)) continue;
+    line_dir.normalize();
+    if (line_dir.dot(dir) < 0.0) line_dir = -line_dir;
+    if (line_dir.dot(dir) < std::cos(20.0 * M_PI / 180.0)) continue;
+    // The point of the line nearest the old centre: both plane equations plus t = 0.
+    Eigen::Matrix3d a;
+    a.row(0) = plane_normal[0].transpose();
+    a.row(1) = plane_normal[1].transpose();
+    a.row(2) = line_dir.transpose();
+    const Eigen::Vector3d rhs(plane_normal[0].dot(plane_centre[0]), plane_normal[1].dot(plane_centre[1]), 0.0);
+    const Eigen::Vector3d line_point = a.colPivHouseholderQr().solve(rhs);
+    if (line_point.norm() > h) continue;
+    centre += line_point;
+    dir = line_dir;
+    ++report.components;
+    // From the vertex nearest the line in the middle of the component, through the mesh
+    // to both ends, one and a half edges beyond the component's crease vertices (the crease may
+    // fade out before the ridge ends).
+    double t_end = -std::numeric_limits<double>::infinity();
+    double t_start = std::numeric_limits<double>::infinity();
+    for (int v : kept) {
+      t_start = std::min(t_start, along(v));
+      t_end = std::max(t_end, along(v));
+    }
+    const double t_mid = 0.5 * (t_start + t_end);
+    int middle = -1;
+    for (auto vh : mesh->vertices()) {
+      const double t = along(vh.idx());
+      if (std::abs(t - t_mid) > 0.5 * h || off(vh.idx()) > max_offset * h) continue;
+      if (middle < 0 || off(vh.idx()) < off(middle)) middle = vh.idx();
+    }
+    if (middle < 0) continue;
+    std::vector<int> chain;
+    for (int sense : {-1, 1}) {
+      std::vector<int> half{middle};
+      const double limit = sense > 0 ? t_end + 1.5 * h : t_start - 1.5 * h;
+      while (true) {
+        const double t = along(half.back());
+        int best = -1;
+        // A step across the line's direction (a grid edge nearly perpendicular to it)
+        // only when no neighbour advances by a third of an edge.
+        for (double advance : {h / 3.0, 0.1 * h}) {
+          for (auto w : mesh->vv_range(mesh->vertex_handle(half.back()))) {
+            const double tw = along(w.idx());
+            if (sense * (tw - t) < advance || sense * (tw - limit) > 0.0 || off(w.idx()) > max_offset * h) continue;
+            if (best < 0 || off(w.idx()) < off(best)) best = w.idx();
+          }
+          if (best >= 0) break;
+        }
+        if (best < 0) break;
+        half.push_back(best);
+      }
+      if (sense < 0) {
+        chain.assign(half.rbegin(), half.rend());
+      } else {
+        chain.insert(chain.end(), half.begin() + 1, half.end());
+      }
+    }
+    if (chain.size() < 3) continue;
+    // Move, and undo the component's moves when a face turns over.
+    std::vector<std::pair<int, TinMesh::Point>> old;
+    std::vector<int> faces;
+    std::vector<Eigen::Vector3d> normal_before;
+    for (int v : chain) {
+      for (auto fh : mesh->vf_range(mesh->vertex_handle(v))) faces.push_back(fh.idx());
+    }
+    std::sort(faces.begin(), faces.end());
+    faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+    for (int f : faces) normal_before.push_back(UnitFaceNormal(*mesh, mesh->face_handle(f)));
+    double max_move = 0.0;
+    for (int v : chain) {
+      const auto vh = mesh->vertex_handle(v);
+      Eigen::Vector3d target = centre + along(v) * dir;
+      if (mesh->is_boundary(vh)) {
+        // A vertex on a straight stretch of the border slides along it to where the line
+        // crosses it (the region's rim stays where it is).
+        TinMesh::HalfedgeHandle out;
+        for (auto heh : mesh->voh_range(vh)) {
+          if (mesh->is_boundary(heh)) out = heh;
+        }
+        if (!out.is_valid()) continue;
+        const Eigen::Vector3d next = ToEigen(mesh->point(mesh->to_vertex_handle(out)));
+        const Eigen::Vector3d prev =
+            ToEigen(mesh->point(mesh->from_vertex_handle(mesh->prev_halfedge_handle(out))));
+        const Eigen::Vector3d p = point(v);
+        // Straight in the tangent plane (the rim bends in height where it crosses a ridge).
+        const Eigen::Vector3d n = ToEigen(mesh->normal(vh));
+        Eigen::Vector3d e1 = p - prev, e2 = next - p;
+        e1 -= e1.dot(n) * n;
+        e2 -= e2.dot(n) * n;
+        if (e1.normalized().dot(e2.normalized()) < 0.99) continue;
+        const Eigen::Vector3d u = (e1.normalized() + e2.normalized()).normalized();
+        const Eigen::Vector3d w0 = p - centre;
+        const double b = u.dot(dir), d = u.dot(w0), e = dir.dot(w0);
+        const double denom = 1.0 - b * b;
+        if (denom < 0.1) continue;
+        const double slide = (b * e - d) / denom, t = (e - b * d) / denom;
+        const Eigen::Vector3d on_rim = p + slide * u, on_line = centre + t * dir;
+        if (std::abs(slide) > 0.5 * h || (on_rim - on_line).norm() > 0.25 * h) continue;
+        // Along the rim, and along the normal to the line's height: the rim's plane.
+        target = on_rim + (on_line - on_rim).dot(n) * n;
+      }
+      old.emplace_back(v, mesh->point(vh));
+      max_move = std::max(max_move, (target - point(v)).norm());
+      mesh->set_point(vh, TinMesh::Point(target.x(), target.y(), target.z()));
+    }
+    bool folded = false;
+    for (size_t i = 0; i < faces.size(); ++i) {
+      const Eigen::Vector3d n = UnitFaceNormal(*mesh, mesh->face_handle(faces[i]));
+      if (n.dot(normal_before[i]) < 0.5) folded = true;
+    }
+    if (folded) {
+      for (const auto& [v, p] : old) mesh->set_point(mesh->vertex_handle(v), p);
+      ++report.rejected;
+      continue;
+    }
+    report.moved += static_cast<int>(old.size());
+    report.max_move = std::max(report.max_move, max_move);
+  }
+  if (report.moved > 0) UpdateVertexNormals(mesh);
+  return report;
 }
 
 }  // namespace facets

@@ -43,6 +43,32 @@ struct CornerNormals {
 // corners (curvature regularisation keeps a ridge round until it is declared a crease).
 std::vector<bool> DetectCreaseEdges(const TinMesh& mesh, double crease_angle_deg, bool rounded_ridges = false);
 
+// A ridge skew to the grid of a TIN becomes a zigzag of crease edges: the vertices can
+// only move along their normals, so none lies on the ridge, and the crease vertices
+// (free of curvature regularisation) spike to fit it. This puts chains of vertices on
+// the line of their crease. For each connected set of crease edges (at least min_edges
+// of them): a least-squares line through its vertices (those farther than max_offset
+// edge lengths dropped, twice), spanning at least min_edges edges; the crease line
+// proper is where the planes fitted to the surface 1-3 edges away on either side meet
+// (a zigzag's vertices lie mostly on one side of the true crease); both sides planar
+// (rms within a tenth of an edge), meeting at 10 degrees or more, within 20 degrees of
+// and one edge from the first line, else the set is left. The chain is followed
+// through the mesh from the vertex nearest the line in the middle to both ends (one and
+// a half edges beyond the crease vertices), each step to the neighbour that advances
+// along the line by at least a third of an edge and lies closest to it, within
+// max_offset edges; its vertices go onto the line, a border vertex by sliding along a
+// straight stretch of the border to where the line crosses it. A set is left as it was
+// when a face next to a moved vertex would turn by more than 60 degrees. Vertex normals
+// are updated when anything moved.
+struct StraightenReport {
+  int components = 0;  // straight crease lines found
+  int moved = 0;       // vertices put on their line
+  int rejected = 0;    // components left because a face would fold
+  double max_move = 0.0;
+};
+StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& crease_edge, int min_edges = 3,
+                                        double max_offset = 0.75);
+
 // Corner normals for a given set of crease edges (kept fixed while a window is
 // adjusted, so that the grey lattice keeps its node indices). Vertex normals must be
 // up to date (UpdateVertexNormals).
