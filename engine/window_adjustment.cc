@@ -840,10 +840,17 @@ WindowReport WindowAdjustment::Run() {
       long long data_count = 0;
       Accumulate(casts, &data_rhs, &data_count);
       AddRidge();
-      const Eigen::VectorXd q_data = options_.solver == WindowSolver::kLdlt && ldlt_.Factorize(normal_)
-                                         ? ldlt_.InverseDiagonal(few_unknowns)
-                                         : InverseDiagonal(normal_, few_unknowns);
-      for (size_t i = 0; i < few_view.size(); ++i) {
+      Eigen::VectorXd q_data;
+      if (options_.solver == WindowSolver::kLdlt && ldlt_.Factorize(normal_)) {
+        q_data = ldlt_.InverseDiagonal(few_unknowns);
+      } else {
+        try {
+          q_data = InverseDiagonal(normal_, few_unknowns);
+        } catch (const std::runtime_error&) {
+          // N of the data alone numerically singular: the formal sigma stands.
+        }
+      }
+      for (size_t i = 0; i < static_cast<size_t>(q_data.size()); ++i) {
         const double q_v = std::max(q[few_unknowns[i]], q_data[i]);
         report.vertex_sigma[few_view[i]] = report.sigma0 * std::sqrt(report.variance_factor * std::max(q_v, 0.0));
       }
