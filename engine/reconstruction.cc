@@ -263,6 +263,8 @@ std::string ReconstructionReport::Json() const {
              {"sigma0", it.sigma0},
              {"robust_scale", it.robust_scale},
              {"rejected", it.rejected},
+             {"silhouette_observations", it.silhouette},
+             {"silhouette_outside", it.silhouette_outside},
              {"max_dn", {it.max_dn_interior, it.max_dn_border, it.max_dn_corner}},
              {"fold_limited", it.fold_limited},
              {"seconds", {{"cast", it.seconds_cast},

@@ -679,7 +679,7 @@ double WindowAdjustment::AccumulateSilhouette(Eigen::VectorXd* rhs, long long* c
       normal_.Add(u, u, weight * a * a);
       lpl += weight * l * l;
       ++*count;
-      if (s > 0.0) ++*outside;
+      if (s > to_full) ++*outside;  // more than a level pixel outside
     }
   }
   return lpl;

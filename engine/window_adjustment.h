@@ -61,7 +61,8 @@ struct IterationReport {
   long long rejected = 0;
   long long downweighted = 0;
   double robust_scale = 0.0;
-  // AdjustmentOptions::silhouette_weight: rim observations, of them on background.
+  // AdjustmentOptions::silhouette_weight: rim observations, of them more than a level
+  // pixel outside the outline (on background).
   long long silhouette = 0;
   long long silhouette_outside = 0;
   double max_dn_interior = 0.0;  // object units
@@ -94,7 +95,7 @@ struct WindowReport {
   long long rejected = 0;
   long long downweighted = 0;
   long long silhouette = 0;  // rim observations (AdjustmentOptions::silhouette_weight), last iteration
-  long long silhouette_outside = 0;  // of them projecting onto background
+  long long silhouette_outside = 0;  // of them more than a level pixel outside the outline
   int unknowns = 0;
   long long redundancy = 0;
   int cg_iterations_total = 0;

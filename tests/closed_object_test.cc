@@ -217,10 +217,11 @@ TEST(ClosedObject, VisualHullStartBeforeABlackBackground) {
 // surface to the silhouettes; the rim vertices' distances to the images' outlines are
 // observations of the adjustment. Without either the surface swells past the
 // silhouettes (background pixels give no observation): IoU min 0.868, object p90 10 GSD
-// (docs/EXPERIMENTS.md). Measured with the term (weight 1000): IoU min 0.962, median
-// 0.971 (the clamp: 0.962 / 0.970); object median 0.095 GSD, p90 0.78 GSD, 97.3 % within
-// 1 GSD (the clamp: 0.052 / 0.45-0.52 / 98.9-99.0 %); TIN closed, no self-intersections;
-// 4 818 rim observations on the finest level, 990 of them on background; about 130 s.
+// (docs/EXPERIMENTS.md). Measured with the term (weight 1000, two runs): IoU min 0.962,
+// median 0.971 (the clamp: 0.962 / 0.970); object median 0.094-0.095 GSD, p90 0.78-0.81
+// GSD, 97.0-97.3 % within 1 GSD (the clamp: 0.052 / 0.45-0.52 / 98.9-99.0 %); TIN closed,
+// no self-intersections; about 5 000 rim observations on the finest level, 29 of them
+// more than a pixel outside the outline; 25-130 s.
 TEST(ClosedObject, SilhouetteTermHoldsTheOutlineWithoutTheHullClamp) {
   const RenderedScene rendered =
       RenderAndRead("tests/data/closed_object_black.json", testing::TempDir() + "/facets_closed_object_silhouette");
