@@ -311,7 +311,7 @@ void AddReconstructCommand(CLI::App& app) {
                   "object lifting of a closed start: scale factors over 1 +- range/2")->capture_default_str();
   sub->add_option("--silhouette-weight", args->silhouette_weight,
                   "silhouette term: weight of a rim vertex's distance to the image outline "
-                  "(grey values^2 per pixel^2; 0 = off; objects before a dark background)")->capture_default_str();
+                  "(grey values^2 per level pixel^2; 0 = off; objects before a dark background)")->capture_default_str();
   sub->add_option("--silhouette-background", args->silhouette_background,
                   "silhouette term: grey values <= this are background (default: --hull-background)");
   sub->add_option("--silhouette-open", args->silhouette_open,
