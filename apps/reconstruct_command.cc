@@ -67,6 +67,13 @@ struct ReconstructArgs {
   double hull_rim_cos = ClosedStartOptions().hull_rim_cos;
   double hull_rim_edges = ClosedStartOptions().hull_rim_edges;
   double background_below = AdjustmentOptions().background_below;
+  // Silhouette term; the background threshold defaults to the visual hull's.
+  double silhouette_weight = AdjustmentOptions().silhouette_weight;
+  std::optional<double> silhouette_background;
+  std::optional<int> silhouette_open, silhouette_fill_holes;
+  double silhouette_rim_cos = AdjustmentOptions().silhouette_rim_cos;
+  double silhouette_outside_px = AdjustmentOptions().silhouette_outside_px;
+  double silhouette_inside_px = AdjustmentOptions().silhouette_inside_px;
   // None: 2 and 5 for closed starts (pixels past a silhouette see the background),
   // off otherwise.
   std::optional<double> robust, reject;
@@ -165,6 +172,14 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.closed.hull_rim_edges = args.hull_rim_edges;
   options.closed.write_start = (std::filesystem::path(args.out) / "start.ply").string();
   options.adjustment.background_below = args.background_below;
+  options.adjustment.silhouette_weight = args.silhouette_weight;
+  options.adjustment.silhouette_rim_cos = args.silhouette_rim_cos;
+  options.adjustment.silhouette_outside_px = args.silhouette_outside_px;
+  options.adjustment.silhouette_inside_px = args.silhouette_inside_px;
+  options.silhouette_foreground = args.visual_hull.foreground;
+  if (args.silhouette_background) options.silhouette_foreground.background_max = *args.silhouette_background;
+  if (args.silhouette_open) options.silhouette_foreground.open_radius = *args.silhouette_open;
+  if (args.silhouette_fill_holes) options.silhouette_foreground.fill_holes_below = *args.silhouette_fill_holes;
   const bool closed = options.start_closed || !args.start_mesh.empty();
   options.adjustment.robust_k = args.robust.value_or(closed ? kClosedRobustK : 0.0);
   options.adjustment.reject_k = args.reject.value_or(closed ? kClosedRejectK : 0.0);
@@ -315,6 +330,22 @@ void AddReconstructCommand(CLI::App& app) {
                 "visual-hull start: push the surface out onto the hull's rims after each level");
   sub->add_option("--closed-lifting-range", args->closed_lifting_range,
                   "object lifting of a closed start: scale factors over 1 +- range/2")->capture_default_str();
+  sub->add_option("--silhouette-weight", args->silhouette_weight,
+                  "silhouette term: weight of a rim vertex's distance to the image outline "
+                  "(grey values^2 per level pixel^2; 0 = off; objects before a dark background)")->capture_default_str();
+  sub->add_option("--silhouette-background", args->silhouette_background,
+                  "silhouette term: grey values <= this are background (default: --hull-background)");
+  sub->add_option("--silhouette-open", args->silhouette_open,
+                  "silhouette term: opening radius of the foreground mask (pixels; default: the visual hull's, 1)");
+  sub->add_option("--silhouette-fill-holes", args->silhouette_fill_holes,
+                  "silhouette term: enclosed background holes under this many pixels are foreground "
+                  "(default: the visual hull's, 500)");
+  sub->add_option("--silhouette-rim-cos", args->silhouette_rim_cos,
+                  "silhouette term: a vertex is on an image's rim where |normal . ray| <= this")->capture_default_str();
+  sub->add_option("--silhouette-outside-px", args->silhouette_outside_px,
+                  "silhouette term: farthest rim projection onto background used (level pixels)")->capture_default_str();
+  sub->add_option("--silhouette-inside-px", args->silhouette_inside_px,
+                  "silhouette term: farthest rim projection inside the outline used (level pixels)")->capture_default_str();
   sub->add_option("--background-below", args->background_below,
                   "pixels with grey value at or below this are background, no observation (negative = off)")->capture_default_str();
   sub->add_option("--robust", args->robust, "Huber weights beyond K robust sigmas (0 = off; default 2 for closed starts, else off)");

@@ -80,6 +80,10 @@ void AdjustmentOptions::Check() const {
   if (!(robust_k >= 0.0)) fail("robust_k must be >= 0");
   if (!(reject_k >= 0.0)) fail("reject_k must be >= 0");
   if (robust_k > 0.0 && reject_k > 0.0 && reject_k < robust_k) fail("reject_k must be >= robust_k");
+  if (!(silhouette_weight >= 0.0)) fail("silhouette_weight must be >= 0");
+  if (!(silhouette_rim_cos >= 0.0 && silhouette_rim_cos <= 1.0)) fail("silhouette_rim_cos must lie in [0, 1]");
+  if (!(silhouette_outside_px >= 0.0)) fail("silhouette_outside_px must be >= 0");
+  if (!(silhouette_inside_px >= 0.0)) fail("silhouette_inside_px must be >= 0");
   std::string error;
   if (!pcg.Check(&error)) fail(error);
 }

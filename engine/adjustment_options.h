@@ -110,6 +110,20 @@ struct AdjustmentOptions {
   // rejected (no observation). 0 = off (each on its own).
   double robust_k = 0.0;
   double reject_k = 0.0;
+  // Silhouette term (objects before a dark background, issue 9): for every free vertex
+  // on a rim of an image that has a silhouette (LevelImage::silhouette), i.e. seen
+  // edge-on (|normal . ray| <= silhouette_rim_cos) and not hidden, one observation
+  // "signed distance of the vertex's projection to the image's foreground outline = 0",
+  // linearised along the vertex's direction: a rim projecting onto background pulls the
+  // surface in, one inside the outline pushes it out. Only where the distance is within
+  // silhouette_outside_px (on background) or silhouette_inside_px (inside; an interior
+  // contour seen against the object itself lies deep inside) pixels of the level.
+  // Weight: grey values^2 per level pixel^2 (a residual of one pixel counts as much as one
+  // grey-value observation with a residual of sqrt(weight)). 0 = off.
+  double silhouette_weight = 0.0;
+  double silhouette_rim_cos = 0.3;
+  double silhouette_outside_px = 6.0;
+  double silhouette_inside_px = 1.5;
   // Tiny ridge on grey and radiometric unknowns (relative to the mean diagonal) so
   // nodes no pixel sees keep their value instead of making N singular.
   double grey_ridge = 1e-8;

@@ -278,6 +278,8 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
     s.background += r.background;
     s.rejected += r.rejected;
     s.downweighted += r.downweighted;
+    s.silhouette += r.silhouette;
+    s.silhouette_outside += r.silhouette_outside;
     s.unknowns += r.unknowns;
     s.redundancy += r.redundancy;
     s.cg_iterations_total += r.cg_iterations_total;

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_map>
 
 #include "engine/hidden_vertices.h"
 #include "engine/start_fitted_plane.h"
@@ -244,6 +245,8 @@ std::string ReconstructionReport::Json() const {
                                             ? static_cast<double>(w.rejected) / (w.observations + w.rejected)
                                             : 0.0},
                      {"downweighted", w.downweighted},
+                     {"silhouette_observations", w.silhouette},
+                     {"silhouette_outside", w.silhouette_outside},
                      {"unknowns", w.unknowns},
                      {"redundancy", w.redundancy},
                      {"sigma0", w.sigma0},
@@ -266,6 +269,8 @@ std::string ReconstructionReport::Json() const {
              {"sigma0", it.sigma0},
              {"robust_scale", it.robust_scale},
              {"rejected", it.rejected},
+             {"silhouette_observations", it.silhouette},
+             {"silhouette_outside", it.silhouette_outside},
              {"max_dn", {it.max_dn_interior, it.max_dn_border, it.max_dn_corner}},
              {"fold_limited", it.fold_limited},
              {"seconds", {{"cast", it.seconds_cast},
@@ -350,9 +355,29 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
                                         : "level images in memory: " + std::to_string(store.MemoryMb()) + " MB"));
   ImageStorage whole_storage;  // whole coarse images read for object lifting
   auto level_images = [&](int level) { return store.Whole(level, &whole_storage); };
+  // Silhouette term (AdjustmentOptions::silhouette_weight): each image's foreground
+  // outline as a signed distance, handed to the windows with their images.
+  std::vector<SilhouetteView> silhouettes;
+  std::unordered_map<int, const SilhouetteView*> silhouette_of;
+  if (options.adjustment.silhouette_weight > 0.0) {
+    const HullViews views = ReadHullViews(block, options.silhouette_foreground);
+    silhouettes.resize(views.masks.size());
+    tbb::parallel_for(size_t{0}, views.masks.size(), [&](size_t k) {
+      silhouettes[k] = {views.cameras[k], views.cam_from_world[k], SignedDistanceToOutline(views.masks[k])};
+    });
+    for (size_t k = 0; k < silhouettes.size(); ++k) silhouette_of[block.images[k].image_id] = &silhouettes[k];
+    say("  silhouettes: " + std::to_string(silhouettes.size()) + " images, background <= " +
+        std::to_string(options.silhouette_foreground.background_max) + ", weight " +
+        std::to_string(options.adjustment.silhouette_weight));
+  }
   auto window_images = [&](int level) -> WindowImages {
-    return [&store, level](const Eigen::AlignedBox3d& box, ImageStorage* storage) {
-      return store.Seeing(level, box, storage);
+    return [&store, &silhouette_of, level](const Eigen::AlignedBox3d& box, ImageStorage* storage) {
+      std::vector<LevelImage> images = store.Seeing(level, box, storage);
+      for (LevelImage& image : images) {
+        const auto found = silhouette_of.find(image.image_id);
+        if (found != silhouette_of.end()) image.silhouette = found->second;
+      }
+      return images;
     };
   };
   auto edge_length = [&](int level) {

@@ -69,6 +69,10 @@ struct ReconstructionOptions {
   // lifting_steps are not used).
   bool start_closed = false;
   ClosedStartOptions closed;
+  // Foreground of the images' silhouettes for the silhouette term of the adjustment
+  // (adjustment.silhouette_weight > 0; visibility/silhouette.h): threshold, opening,
+  // components, holes, as for the visual hull.
+  ForegroundOptions silhouette_foreground = VisualHullOptions::DefaultForeground();
   // Region of interest (local); default: the block's, else the tie points' extent.
   std::optional<RegionOfInterest> roi;
   // Tiled level images in this folder, read per window through a cache of

@@ -629,6 +629,66 @@ double WindowAdjustment::AccumulateCurvature(Eigen::VectorXd* rhs, long long* co
   return lpl;
 }
 
+double WindowAdjustment::AccumulateSilhouette(Eigen::VectorXd* rhs, long long* count, long long* outside) {
+  *count = 0;
+  *outside = 0;
+  if (options_.silhouette_weight <= 0.0) return 0.0;
+  const double weight = options_.silhouette_weight;
+  const int num_vertices = static_cast<int>(mesh_->n_vertices());
+  double lpl = 0.0;
+  for (const LevelImage& image : images_) {
+    const SilhouetteView* view = image.silhouette;
+    if (!view) continue;
+    const Eigen::Vector3d centre = view->cam_from_world.Inverse().translation;
+    // Level pixels -> pixels of the silhouette's (full-size) image.
+    const double to_full = view->camera.FocalX() / image.camera->FocalX();
+    const double max_out = options_.silhouette_outside_px * to_full;
+    const double max_in = options_.silhouette_inside_px * to_full;
+    // The observation is written in level pixels: the weight means the same on every level.
+    const double per_level_pixel = 1.0 / to_full;
+    for (int v = 0; v < num_vertices; ++v) {
+      const int u = vertex_unknown_[v];
+      if (u < 0 || vertex_ring_[v].empty()) continue;
+      auto vh = mesh_->vertex_handle(v);
+      const Eigen::Vector3d x = ToEigen(mesh_->point(vh));
+      const Eigen::Vector3d n = Direction(v);
+      const Eigen::Vector3d ray = x - centre;
+      const double depth = ray.norm();
+      if (!(depth > 0.0) || std::abs(n.dot(ray)) > options_.silhouette_rim_cos * depth) continue;
+      const Eigen::Vector3d in_cam = view->cam_from_world * x;
+      if (in_cam.z() <= 0.0) continue;
+      const Eigen::Vector2d p = view->camera.ImageFromCam(in_cam);
+      double s = 0.0;
+      Eigen::Vector2d gradient;
+      if (!view->distance.Sample(p, &s, &gradient)) continue;
+      if (s > max_out || s < -max_in) continue;
+      // Pixels the projection moves per unit displacement along the direction, and how
+      // much of it goes across the outline.
+      const double eps = 1e-4 * depth;
+      const Eigen::Vector3d moved = view->cam_from_world * (x + eps * n);
+      if (moved.z() <= 0.0) continue;
+      const Eigen::Vector2d shift = (view->camera.ImageFromCam(moved) - p) / eps;
+      const double a_full = gradient.dot(shift);
+      if (!(a_full > 0.5 * shift.norm() * gradient.norm()) || gradient.norm() < 0.5) continue;
+      // Hidden by the surface itself or its surroundings (an interior contour behind a
+      // column): not this image's outline. The grazing ray may touch the ring's facets.
+      double h = 0.0;
+      for (int j : vertex_ring_[v]) h += (ToEigen(mesh_->point(mesh_->vertex_handle(j))) - x).norm();
+      h /= vertex_ring_[v].size();
+      const float t_far = static_cast<float>(depth - 0.5 * h);
+      if (t_far > 0.0f && scene_->triangle_scene().Intersect(centre, ray / depth, 0.0f, t_far).hit) continue;
+      const double a = a_full * per_level_pixel;
+      const double l = -s * per_level_pixel;
+      (*rhs)[u] += weight * a * l;
+      normal_.Add(u, u, weight * a * a);
+      lpl += weight * l * l;
+      ++*count;
+      if (s > to_full) ++*outside;  // more than a level pixel outside
+    }
+  }
+  return lpl;
+}
+
 void WindowAdjustment::SetOccluders(std::vector<Eigen::Vector3d> points,
                                     std::vector<Eigen::Vector3i> triangles) {
   occluder_points_ = std::move(points);
@@ -723,6 +783,10 @@ WindowReport WindowAdjustment::Run() {
     long long count = 0, pseudo = 0;
     double lpl = Accumulate(casts, &rhs, &count);
     lpl += AccumulateCurvature(&rhs, &pseudo);
+    long long silhouette_outside = 0;
+    lpl += AccumulateSilhouette(&rhs, &it.silhouette, &silhouette_outside);
+    it.silhouette_outside = silhouette_outside;
+    pseudo += it.silhouette;
     const int determined = AddRidge();
     it.seconds_linearise = Seconds(start);
 
@@ -748,6 +812,8 @@ WindowReport WindowAdjustment::Run() {
     report.background = it.background;
     report.rejected = rejected_;
     report.downweighted = downweighted_;
+    report.silhouette = it.silhouette;
+    report.silhouette_outside = it.silhouette_outside;
     report.unknowns = determined;
     report.redundancy = redundancy;
 

@@ -25,6 +25,7 @@
 #include "mesh/tessellation.h"
 #include "mesh/tin.h"
 #include "visibility/pixel_cast.h"
+#include "visibility/silhouette.h"
 
 namespace facets {
 
@@ -35,6 +36,8 @@ struct LevelImage {
   const Camera* camera = nullptr;      // scaled to the level
   Rigid3d cam_from_world;
   const ImagePlanes* pixels = nullptr;  // same channel count for every image
+  // The image's foreground outline (AdjustmentOptions::silhouette_weight); null: none.
+  const SilhouetteView* silhouette = nullptr;
 };
 
 enum VertexFlag : uint8_t {
@@ -58,6 +61,10 @@ struct IterationReport {
   long long rejected = 0;
   long long downweighted = 0;
   double robust_scale = 0.0;
+  // AdjustmentOptions::silhouette_weight: rim observations, of them more than a level
+  // pixel outside the outline (on background).
+  long long silhouette = 0;
+  long long silhouette_outside = 0;
   double max_dn_interior = 0.0;  // object units
   double max_dn_border = 0.0;
   double max_dn_corner = 0.0;
@@ -87,6 +94,8 @@ struct WindowReport {
   long long background = 0;
   long long rejected = 0;
   long long downweighted = 0;
+  long long silhouette = 0;  // rim observations (AdjustmentOptions::silhouette_weight), last iteration
+  long long silhouette_outside = 0;  // of them more than a level pixel outside the outline
   int unknowns = 0;
   long long redundancy = 0;
   int cg_iterations_total = 0;
@@ -163,6 +172,8 @@ class WindowAdjustment {
   double Accumulate(const std::vector<std::vector<PixelObservation>>& casts,
                     Eigen::VectorXd* rhs, long long* count);
   double AccumulateCurvature(Eigen::VectorXd* rhs, long long* count);
+  // AdjustmentOptions::silhouette_weight: rim observations of the free vertices.
+  double AccumulateSilhouette(Eigen::VectorXd* rhs, long long* count, long long* outside);
   // Adds the ridge to N's diagonal; returns the unknowns determined beyond it.
   int AddRidge();
   // Images with at least min_view_share of the best image's pixels on the faces around

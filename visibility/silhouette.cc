@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
@@ -183,6 +184,98 @@ PixelMask CoverageMask(const TriangleScene& scene, const Camera& camera,
     }
   });
   return mask;
+}
+
+namespace {
+
+// Squared distance transform along one line (Felzenszwalb and Huttenlocher): f holds
+// 0 at the sites and a large value elsewhere; returns min_q (p - q)^2 + f(q).
+void SquaredDistance1d(const std::vector<double>& f, std::vector<double>* d, std::vector<int>* v,
+                       std::vector<double>* z) {
+  const int n = static_cast<int>(f.size());
+  d->assign(n, 0.0);
+  v->assign(n, 0);
+  z->assign(n + 1, 0.0);
+  int k = 0;
+  (*v)[0] = 0;
+  (*z)[0] = -std::numeric_limits<double>::infinity();
+  (*z)[1] = std::numeric_limits<double>::infinity();
+  auto meet = [&](int q, int r) { return ((f[q] + double(q) * q) - (f[r] + double(r) * r)) / (2.0 * (q - r)); };
+  for (int q = 1; q < n; ++q) {
+    double s = meet(q, (*v)[k]);
+    while (s <= (*z)[k]) {  // z[0] = -inf ends the loop
+      --k;
+      s = meet(q, (*v)[k]);
+    }
+    ++k;
+    (*v)[k] = q;
+    (*z)[k] = s;
+    (*z)[k + 1] = std::numeric_limits<double>::infinity();
+  }
+  k = 0;
+  for (int q = 0; q < n; ++q) {
+    while ((*z)[k + 1] < q) ++k;
+    const int r = (*v)[k];
+    (*d)[q] = double(q - r) * (q - r) + f[r];
+  }
+}
+
+// Euclidean distance of every pixel centre to the nearest pixel with mask value `site`
+// (a large value when there is none).
+std::vector<double> DistanceTo(const PixelMask& mask, uint8_t site) {
+  const int w = mask.width, h = mask.height;
+  const double kFar = 1e20;
+  std::vector<double> grid(static_cast<size_t>(w) * h);
+  for (size_t i = 0; i < grid.size(); ++i) grid[i] = (mask.data[i] != 0) == (site != 0) ? 0.0 : kFar;
+  std::vector<double> f, d, z;
+  std::vector<int> v;
+  for (int x = 0; x < w; ++x) {
+    f.resize(h);
+    for (int y = 0; y < h; ++y) f[y] = grid[static_cast<size_t>(y) * w + x];
+    SquaredDistance1d(f, &d, &v, &z);
+    for (int y = 0; y < h; ++y) grid[static_cast<size_t>(y) * w + x] = d[y];
+  }
+  for (int y = 0; y < h; ++y) {
+    f.assign(grid.begin() + static_cast<size_t>(y) * w, grid.begin() + static_cast<size_t>(y + 1) * w);
+    SquaredDistance1d(f, &d, &v, &z);
+    for (int x = 0; x < w; ++x) grid[static_cast<size_t>(y) * w + x] = std::sqrt(d[x]);
+  }
+  return grid;
+}
+
+}  // namespace
+
+SilhouetteDistance SignedDistanceToOutline(const PixelMask& mask) {
+  SilhouetteDistance out;
+  out.width = mask.width;
+  out.height = mask.height;
+  out.value.assign(mask.data.size(), 0.0f);
+  if (mask.data.empty()) return out;
+  const std::vector<double> to_inside = DistanceTo(mask, 1);
+  const std::vector<double> to_outside = DistanceTo(mask, 0);
+  const double cap = static_cast<double>(mask.width) + mask.height;  // no site at all
+  for (size_t i = 0; i < mask.data.size(); ++i) {
+    out.value[i] = static_cast<float>(mask.data[i] ? -(std::min(to_outside[i], cap) - 0.5)
+                                                   : std::min(to_inside[i], cap) - 0.5);
+  }
+  return out;
+}
+
+bool SilhouetteDistance::Sample(const Eigen::Vector2d& position, double* distance,
+                                Eigen::Vector2d* gradient) const {
+  const double gx = position.x() - 0.5, gy = position.y() - 0.5;  // in pixel-centre units
+  if (!(gx >= 0.0 && gy >= 0.0 && gx <= width - 1.0 && gy <= height - 1.0)) return false;
+  const int x0 = std::min(static_cast<int>(gx), std::max(width - 2, 0));
+  const int y0 = std::min(static_cast<int>(gy), std::max(height - 2, 0));
+  const int x1 = std::min(x0 + 1, width - 1), y1 = std::min(y0 + 1, height - 1);
+  const double fx = gx - x0, fy = gy - y0;
+  const double v00 = at(x0, y0), v10 = at(x1, y0), v01 = at(x0, y1), v11 = at(x1, y1);
+  *distance = (1 - fy) * ((1 - fx) * v00 + fx * v10) + fy * ((1 - fx) * v01 + fx * v11);
+  if (gradient) {
+    *gradient = Eigen::Vector2d((1 - fy) * (v10 - v00) + fy * (v11 - v01),
+                                (1 - fx) * (v01 - v00) + fx * (v11 - v10));
+  }
+  return true;
 }
 
 MaskComparison CompareMasks(const PixelMask& foreground, const PixelMask& covered) {

@@ -68,6 +68,31 @@ std::vector<int> LabelComponents(const PixelMask& mask, std::vector<long long>* 
 PixelMask CoverageMask(const TriangleScene& scene, const Camera& camera,
                        const Rigid3d& cam_from_world);
 
+// Signed distance of every pixel centre to a mask's outline, in pixels: positive on
+// background (outside), negative on the mask (inside); the outline lies half-way between
+// a mask pixel and its background neighbour, so two such neighbours get -0.5 and +0.5.
+// Exact Euclidean distances between pixel centres (separable squared-distance transform).
+// Used by the silhouette term of the adjustment (AdjustmentOptions::silhouette_weight):
+// where a rim of the surface projects against the outline.
+struct SilhouetteDistance {
+  int width = 0, height = 0;
+  std::vector<float> value;  // value[y * width + x]
+  float at(int x, int y) const { return value[static_cast<size_t>(y) * width + x]; }
+  // Bilinear between pixel centres at a pixel position (centre of the top-left pixel at
+  // (0.5, 0.5), io/camera.h), with its gradient (pixels per pixel); false outside the
+  // centres' span.
+  bool Sample(const Eigen::Vector2d& position, double* distance, Eigen::Vector2d* gradient) const;
+};
+SilhouetteDistance SignedDistanceToOutline(const PixelMask& mask);
+
+// One image's silhouette as the adjustment uses it: the camera and pose of the image
+// file (full size) and the signed distance to its foreground outline.
+struct SilhouetteView {
+  Camera camera;
+  Rigid3d cam_from_world;
+  SilhouetteDistance distance;
+};
+
 struct MaskComparison {
   long long foreground = 0;    // pixels of the image's foreground
   long long covered = 0;       // pixels the mesh covers
