@@ -19,6 +19,7 @@
 #include "engine/reconstruction.h"
 #include "io/atomic_file.h"
 #include "io/colmap_io.h"
+#include "io/ply_io.h"
 #include "io/project_io.h"
 #include "mesh/closed_surface.h"
 
@@ -93,7 +94,7 @@ struct ReconstructArgs {
   bool tiled_images = false;
   double image_memory_mb = 1024.0;
   int threads = 0;
-  bool no_glb = false, no_vrml = false, no_rasters = false, no_preview = false;
+  bool no_glb = false, no_vrml = false, no_rasters = false, no_preview = false, keep_levels = false;
 };
 
 void RunReconstruct(const ReconstructArgs& args) {
@@ -215,6 +216,15 @@ void RunReconstruct(const ReconstructArgs& args) {
     options.roi = roi;
   }
   options.progress = say;
+  if (args.keep_levels) {
+    const std::filesystem::path dir = std::filesystem::path(args.out) / "levels";
+    std::filesystem::create_directories(dir);
+    options.level_done = [dir](int level, const TinMesh& mesh) {
+      const std::string path = (dir / ("level_" + std::to_string(level) + ".ply")).string();
+      WritePly(path + ".tmp", TinGeometryData(mesh));
+      CommitTemporary(path + ".tmp", path);
+    };
+  }
   const Reconstruction result = Reconstruct(block, options);
 
   // Products: each written to a temporary name and renamed (io/atomic_file.h).
@@ -385,6 +395,7 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_flag("--no-vrml", args->no_vrml, "do not write surface.wrl");
   sub->add_flag("--no-rasters", args->no_rasters, "do not write ortho.tif, dsm.tif, sigma.tif");
   sub->add_flag("--no-preview", args->no_preview, "do not write preview.png");
+  sub->add_flag("--keep-levels", args->keep_levels, "also write each level's TIN as levels/level_K.ply (K = pyramid level)");
   sub->callback([args] {
     try {
       RunReconstruct(*args);

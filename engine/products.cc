@@ -171,6 +171,16 @@ MeshData TinMeshData(const Reconstruction& r) {
   return mesh;
 }
 
+MeshData TinGeometryData(const TinMesh& mesh) {
+  MeshData data;
+  for (auto vh : mesh.vertices()) {
+    data.vertices.push_back(ToEigen(mesh.point(vh)));
+    data.normals.push_back(ToEigen(mesh.normal(vh)));
+  }
+  for (const auto& f : FaceVertices(mesh)) data.faces.emplace_back(f[0], f[1], f[2]);
+  return data;
+}
+
 std::vector<std::string> WriteSurfaceProducts(const ProductSurface& s, const std::string& out_dir,
                                               const ProductOptions& options) {
   options.Check();

@@ -76,6 +76,9 @@ MeshData SurfaceMeshData(const ProductSurface& surface);
 // the grey model is linear per facet, so per-vertex colour represents it exactly).
 ExportSurface MakeExportSurface(const ProductSurface& surface);
 MeshData TinMeshData(const Reconstruction& r);
+// A TIN's vertices, vertex normals and triangles (no sigma, no views): the per-level
+// meshes of `facets reconstruct --keep-levels`.
+MeshData TinGeometryData(const TinMesh& mesh);
 
 // Writes the selected surface products (surface.ply, surface.glb, surface.wrl,
 // ortho.tif, dsm.tif, sigma.tif, preview.png) into out_dir, each atomically, and

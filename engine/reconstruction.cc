@@ -622,6 +622,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     level_report.windows = std::move(adjusted.windows);
     level_report.window_core_faces = std::move(adjusted.window_core_faces);
     level_report.window_groups = adjusted.groups;
+    if (options.level_done) options.level_done(level, mesh);
     say("  level " + std::to_string(level) + ": " + std::to_string(level_report.windows.size()) +
         " windows in " + std::to_string(level_report.window_groups) + " groups, sigma0 " +
         std::to_string(level_report.window.sigma0));

@@ -108,6 +108,9 @@ struct ReconstructionOptions {
   int straighten_rounds = 3;
   // Called with one line of progress at a time (stage, level, iteration, sigma0).
   std::function<void(const std::string&)> progress;
+  // Called with each level's TIN once the level is finished (e.g. to keep it for a look
+  // at how the multigrid got there).
+  std::function<void(int level, const TinMesh& mesh)> level_done;
 
   void Check() const;  // throws std::invalid_argument naming the option
 };

@@ -107,10 +107,16 @@ ImageBlock BuildImageBlock(const Scene& scene) {
       const double d = c.flying_height * std::tan(c.oblique_tilt_deg * kDeg);
       // Looking north (from the south), east, south, west.
       const Eigen::Vector2d dirs[4] = {{0, 1}, {1, 0}, {0, -1}, {-1, 0}};
+      const double strip_base = c.oblique_base > 0 ? c.oblique_base : bx;
       for (int i = 0; i < c.obliques; ++i) {
-        const Eigen::Vector3d centre(c.target.x() - d * dirs[i].x(), c.target.y() - d * dirs[i].y(),
-                                     z_fly);
-        poses.push_back({centre, ground_target, Eigen::Vector3d::UnitZ()});
+        // Across the viewing direction (to the camera's right), parallel axes.
+        const Eigen::Vector3d across(dirs[i].y(), -dirs[i].x(), 0);
+        for (int k = 0; k < c.oblique_strip; ++k) {
+          const Eigen::Vector3d shift = (k - 0.5 * (c.oblique_strip - 1)) * strip_base * across;
+          const Eigen::Vector3d centre(c.target.x() - d * dirs[i].x(),
+                                       c.target.y() - d * dirs[i].y(), z_fly);
+          poses.push_back({centre + shift, ground_target + shift, Eigen::Vector3d::UnitZ()});
+        }
       }
       break;
     }

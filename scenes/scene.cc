@@ -252,6 +252,10 @@ CameraLayout ParseLayout(const Field& f) {
   c.oblique_tilt_deg = f.Number("oblique_tilt_deg", c.oblique_tilt_deg);
   Require(c.oblique_tilt_deg > 0 && c.oblique_tilt_deg < 80, f, "oblique_tilt_deg",
           "must be in (0, 80)");
+  c.oblique_strip = f.Int("oblique_strip", c.oblique_strip);
+  Require(c.oblique_strip >= 1 && c.oblique_strip <= 9, f, "oblique_strip", "must be 1..9");
+  c.oblique_base = f.Number("oblique_base", c.oblique_base);
+  Require(c.oblique_base >= 0, f, "oblique_base", "must be >= 0");
   c.target = f.Vec<3>("target", Eigen::Vector3d::Zero());
   for (const Field& r : f.Array("rings")) {
     RingSpec ring;

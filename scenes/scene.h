@@ -131,6 +131,12 @@ struct CameraLayout {
   int rows = 3, cols = 3;         // block strips x images per strip
   int obliques = 4;               // block: looking N, E, S, W at the block centre
   double oblique_tilt_deg = 40;   // off nadir
+  // Obliques per direction, side by side along a strip across the viewing direction with
+  // parallel axes (a multi-camera rig flown along a line), oblique_base apart
+  // (0 = the nadir forward base). One per direction sees each wall once: too few to
+  // intersect a wall (its depth is then decided by the regularisation alone).
+  int oblique_strip = 1;
+  double oblique_base = 0;        // m
   Eigen::Vector3d target = Eigen::Vector3d::Zero();  // block centre / ring target
   std::vector<RingSpec> rings;
   std::vector<ExplicitCamera> cameras;

@@ -22,7 +22,8 @@ TEST(SceneTest, BundledScenesLoadAndBuild) {
       {"seed_gable_rotated.json", 2},   {"seed_gable_rotated_patch.json", 2},
       {"seed_cylinder_parallel.json", 2}, {"seed_cylinder_parallel_patch.json", 2},
       {"seed_cylinder_rotated.json", 2}, {"seed_cylinder_rotated_patch.json", 2},
-      {"block.json", 13},               {"object.json", 20}};
+      {"block.json", 13},               {"block_oblique.json", 21},
+      {"object.json", 20}};
   for (const auto& [file, images] : scenes) {
     const Scene scene = LoadScene(DataPath(file));
     const TruthMesh mesh = BuildTruthMesh(scene);
@@ -191,6 +192,28 @@ TEST(CameraLayoutTest, NadirLookAtAndStereoCrop) {
     EXPECT_GT(px.x(), 50);
     EXPECT_LT(px.x(), camera.width - 50);
     EXPECT_NEAR(camera.FocalX(), 7650, 1e-9);
+  }
+}
+
+TEST(CameraLayoutTest, ObliqueStripHasParallelAxesSideBySide) {
+  // block_oblique.json: 9 nadir, then per direction (N, E, S, W) three obliques 30 m apart.
+  const ImageBlock block = BuildImageBlock(LoadScene(DataPath("block_oblique.json")));
+  ASSERT_EQ(block.images.size(), 21u);
+  const double tilt = 40 * M_PI / 180;
+  for (int dir = 0; dir < 4; ++dir) {
+    const BlockImage& first = block.images[9 + 3 * dir];
+    const Eigen::Vector3d axis0 = first.cam_from_world.rotation.inverse() * Eigen::Vector3d::UnitZ();
+    EXPECT_NEAR(std::acos(-axis0.z()), tilt, 1e-9);  // 40 deg off nadir
+    for (int k = 1; k < 3; ++k) {
+      const BlockImage& other = block.images[9 + 3 * dir + k];
+      const Eigen::Vector3d axis =
+          other.cam_from_world.rotation.inverse() * Eigen::Vector3d::UnitZ();
+      EXPECT_NEAR(axis.dot(axis0), 1.0, 1e-12) << "axes not parallel, direction " << dir;
+      const Eigen::Vector3d step = other.ProjectionCentre() - first.ProjectionCentre();
+      EXPECT_NEAR(step.norm(), 30.0 * k, 1e-9);
+      EXPECT_NEAR(step.dot(axis0), 0.0, 1e-9);  // side by side, across the view
+      EXPECT_NEAR(step.z(), 0.0, 1e-9);
+    }
   }
 }
 

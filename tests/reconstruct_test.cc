@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <iostream>
+#include <utility>
+#include <vector>
 
 #include "engine/reconstruction.h"
 #include "io/colmap_io.h"
@@ -31,8 +33,19 @@ void ReconstructSeedGable(double break_off_gsd, const std::string& name) {
   options.start = StartSurfaceKind::kPlane;
   options.break_off_gsd = break_off_gsd;
   options.progress = [](const std::string& line) { std::cout << line << "\n"; };
+  // level_done (`facets reconstruct --keep-levels`) sees every level's finished TIN.
+  std::vector<std::pair<int, int>> levels_done;  // level, faces
+  options.level_done = [&](int level, const TinMesh& mesh) {
+    levels_done.emplace_back(level, static_cast<int>(mesh.n_faces()));
+  };
   const Reconstruction r = Reconstruct(block, options);
   ASSERT_EQ(r.report.levels.size(), 3u);
+  ASSERT_EQ(levels_done.size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(levels_done[i].first, 2 - static_cast<int>(i));
+    EXPECT_EQ(levels_done[i].second, r.report.levels[i].faces);
+  }
+  EXPECT_EQ(levels_done.back().second, static_cast<int>(r.mesh.n_faces()));
   for (const LevelReport& level : r.report.levels) {
     const double expected = break_off_gsd > 0 ? break_off_gsd * level.ground_pixel
                                               : 0.01 * std::pow(2.0, level.level);
