@@ -1,7 +1,6 @@
 #include "engine/window_adjustment.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -429,12 +428,17 @@ double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservati
   const auto& row_ptr = normal_.row_ptr();
   const int64_t nnz = normal_.nonZeros();
   const auto& local_nodes = FacetLocalNodes();
-  tbb::enumerable_thread_specific<Partial> partials([&] {
-    Partial p;
+  // A fixed number of shares, each summing fixed runs of every image's observations in
+  // their order, then added up in share order: the same sums, to the last bit, whatever
+  // the number of threads and however TBB schedules them (thread-local shares made runs
+  // differ in the last digits, and iterations, stall stops and fold-guard decisions
+  // amplify that into visibly different surfaces).
+  constexpr int kShares = 8;
+  std::vector<Partial> partials(kShares);
+  for (Partial& p : partials) {
     p.values.assign(nnz, 0.0);
     p.rhs = Eigen::VectorXd::Zero(num_unknowns_);
-    return p;
-  });
+  }
   obs_terms_.assign(casts.size(), {});
   for (size_t k = 0; k < casts.size(); ++k) {
     const auto& observations = casts[k];
@@ -445,13 +449,15 @@ double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservati
     auto& terms = obs_terms_[k];
     const PixelRays rays(*images_[k].camera, images_[k].cam_from_world);
     const ImagePlanes& pixels = *images_[k].pixels;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, observations.size(), 4096),
-                      [&](const tbb::blocked_range<size_t>& range) {
-      Partial& p = partials.local();
+    const size_t run = (observations.size() + kShares - 1) / kShares;
+    tbb::parallel_for(0, kShares, [&](int share) {
+      Partial& p = partials[share];
       PixelRay ray;
       ray.origin = rays.origin();
       FacetState facet;
-      for (size_t o = range.begin(); o != range.end(); ++o) {
+      const size_t first = std::min(observations.size(), share * run);
+      const size_t last = std::min(observations.size(), first + run);
+      for (size_t o = first; o != last; ++o) {
         const PixelObservation& obs = observations[o];
         const int f = obs.face;
         const int local_k = obs.facet % kSubTrianglesPerFace;

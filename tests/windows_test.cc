@@ -4,6 +4,7 @@
 // windowed surface must match the one-window result within the reported standard
 // deviations, at the window borders too (no seams).
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <cmath>
@@ -111,6 +112,54 @@ TEST(Windows, ManyWindowsMatchOneWindowWithinSigma) {
   EXPECT_LT(c.rms_windows, 1.1 * c.rms_one);
   EXPECT_LT(c.rms_one, 0.04);
   EXPECT_NEAR(b.summary.sigma0, a.summary.sigma0, 0.1);
+}
+
+// Runs are reproducible to the bit: the same surface, sigma0 and vertex sigma with one
+// thread and with two (windows of a group in parallel, pixel casting and the normal
+// equations' sums in parallel), and twice with two.
+TEST(Windows, SameSurfaceToTheBitWithOneAndTwoThreads) {
+  const Scene scene = LoadScene(std::string(FACETS_SOURCE_DIR) + "/tests/data/windows_gable.json");
+  const std::string dir = testing::TempDir() + "/facets_windows_threads";
+  RenderOptions render_options;
+  render_options.noise_sigma = 4.0;
+  RenderScene(scene, dir, render_options);
+  const ImageBlock block = ReadColmapModel(dir + "/sparse", dir + "/images");
+  LoadedImages loaded;
+  LoadLevelImages(block, /*grey=*/true, &loaded);
+  const TruthMesh truth = BuildTruthMesh(scene);
+  const Renderer renderer(scene, truth);
+  const TinMesh start = StartBelowTruth(scene, renderer, 2.0, 0.3);
+
+  AdjustmentOptions adjustment;
+  adjustment.max_iterations = 4;
+  adjustment.max_step = 0.5;
+  LevelWindowOptions windows;
+  windows.partition.max_faces = 250;
+  struct Run {
+    TinMesh mesh;
+    LevelAdjustment level;
+  };
+  auto run = [&](int threads) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    Run r{start, {}};
+    r.level = AdjustLevelInWindows(&r.mesh, loaded.images, adjustment, windows, false, {});
+    return r;
+  };
+  const Run one = run(1), two = run(2), again = run(2);
+  ASSERT_GE(two.level.windows.size(), 8u);
+  int differ_threads = 0, differ_again = 0;
+  for (auto vh : start.vertices()) {
+    differ_threads += one.mesh.point(vh) != two.mesh.point(vh);
+    differ_again += two.mesh.point(vh) != again.mesh.point(vh);
+  }
+  std::cout << start.n_vertices() << " vertices, " << two.level.windows.size() << " windows, sigma0 "
+            << one.level.summary.sigma0 << " / " << two.level.summary.sigma0 << " / "
+            << again.level.summary.sigma0 << "; vertices that differ: " << differ_threads
+            << " (1 vs 2 threads), " << differ_again << " (2 vs 2)\n";
+  EXPECT_EQ(differ_threads, 0);
+  EXPECT_EQ(differ_again, 0);
+  EXPECT_EQ(one.level.summary.sigma0, two.level.summary.sigma0);
+  EXPECT_EQ(one.level.summary.vertex_sigma, two.level.summary.vertex_sigma);
 }
 
 }  // namespace
