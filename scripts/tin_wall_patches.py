@@ -1,0 +1,189 @@
+#!/usr/bin/env python3
+# Usage: python3 scripts/tin_wall_patches.py RUN/tin.ply --wall NAME X0 Y0 X1 Y1 [--wall ...]
+#          [--min-views 2] [--min-patch 4] [--band 2.5] [--steep 45]
+# Wall faces of a facets TIN (docs/EXPERIMENTS.md, boruszyn_kap walls), told apart from roof,
+# ground and spikes: a face counts as wall when
+#   - all three corners are seen by >= --min-views images (tin.ply `views`),
+#   - its normal is more than --steep degrees from vertical (tilt from vertical < 90 - steep),
+#   - it lies in a connected patch (shared edges) of such faces of >= --min-patch m2, and
+#   - its centre lies within --band m (horizontally) of a given wall line (an eave line from the
+#     tie points), between the line's ends (+- 1 m).
+# Reported per wall and over all walls: area histogram of the tilt from vertical (elevation of
+# the face normal above the horizontal) in 5-degree bins, the azimuth of the area-weighted mean
+# normal against the line's normal, a total-least-squares plane through the wall faces' corners
+# (its tilt from vertical) and the horizontal offset of the wall from the line by height.
+import math, struct, sys
+
+def read_ply(path):
+    data = open(path, 'rb').read()
+    end = data.index(b'end_header\n') + len(b'end_header\n')
+    header = data[:end].decode()
+    lines = header.splitlines()
+    if 'binary_little_endian' not in header:
+        sys.exit(f'{path}: expected a binary_little_endian tin.ply of facets')
+    props = [l.split()[2] for l in lines if l.startswith('property') and 'list' not in l]
+    vprops = []
+    in_vertex = False
+    for l in lines:
+        if l.startswith('element'):
+            in_vertex = l.split()[1] == 'vertex'
+        elif l.startswith('property') and 'list' not in l and in_vertex:
+            vprops.append((l.split()[1], l.split()[2]))
+    tmap = {'double': 'd', 'float': 'f', 'int': 'i', 'uchar': 'B', 'uint': 'I', 'int32': 'i', 'float32': 'f', 'float64': 'd', 'uint8': 'B'}
+    fmt = '<' + ''.join(tmap[t] for t, _ in vprops)
+    names = [n for _, n in vprops]
+    nv = int([l for l in lines if l.startswith('element vertex')][0].split()[2])
+    nf = int([l for l in lines if l.startswith('element face')][0].split()[2])
+    size = struct.calcsize(fmt)
+    pts, views = [], []
+    for i in range(nv):
+        rec = dict(zip(names, struct.unpack_from(fmt, data, end + i * size)))
+        pts.append((rec['x'], rec['y'], rec['z']))
+        views.append(rec.get('views', 2))
+    off = end + nv * size
+    face_extra = [l for l in lines[lines.index([l for l in lines if l.startswith('element face')][0]) + 1:]
+                  if l.startswith('property') and 'list' not in l]
+    extra = struct.calcsize('<' + ''.join(tmap[l.split()[1]] for l in face_extra)) if face_extra else 0
+    faces = []
+    for _ in range(nf):
+        cnt = data[off]; off += 1
+        faces.append(struct.unpack_from('<%di' % cnt, data, off)[:3]); off += 4 * cnt + extra
+    del props
+    return pts, views, faces
+
+def main():
+    args = sys.argv[1:]
+    if not args or args[0].startswith('-'):
+        sys.exit(__doc__ or 'usage: tin_wall_patches.py TIN --wall NAME X0 Y0 X1 Y1 ...')
+    path = args.pop(0)
+    walls = []; min_views = 2; min_patch = 4.0; band = 2.5; steep = 45.0
+    while args:
+        a = args.pop(0)
+        if a == '--wall':
+            walls.append((args[0], *map(float, args[1:5]))); del args[:5]
+        elif a == '--min-views': min_views = int(args.pop(0))
+        elif a == '--min-patch': min_patch = float(args.pop(0))
+        elif a == '--band': band = float(args.pop(0))
+        elif a == '--steep': steep = float(args.pop(0))
+        else: sys.exit(f'unknown argument {a}')
+    pts, views, faces = read_ply(path)
+    info = []
+    for (a, b, c) in faces:
+        A, B, C = pts[a], pts[b], pts[c]
+        u = [B[i] - A[i] for i in range(3)]; v = [C[i] - A[i] for i in range(3)]
+        n = (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
+        l = math.sqrt(sum(x * x for x in n))
+        if l == 0:
+            info.append(None); continue
+        n = tuple(x / l for x in n)
+        tilt = math.degrees(math.asin(min(1.0, abs(n[2]))))  # tilt of the face from vertical
+        seen = min(views[a], views[b], views[c]) >= min_views
+        cen = tuple((A[i] + B[i] + C[i]) / 3 for i in range(3))
+        info.append(dict(n=n, area=l / 2, tilt=tilt, seen=seen, cen=cen))
+    steep_ok = [i is not None and i['seen'] and i['tilt'] < 90 - steep for i in info]
+    # connected patches of steep, seen faces over shared edges
+    edge_faces = {}
+    for fi, (a, b, c) in enumerate(faces):
+        if not steep_ok[fi]: continue
+        for e in ((a, b), (b, c), (c, a)):
+            edge_faces.setdefault((min(e), max(e)), []).append(fi)
+    parent = list(range(len(faces)))
+    def find(x):
+        while parent[x] != x:
+            parent[x] = parent[parent[x]]; x = parent[x]
+        return x
+    for fl in edge_faces.values():
+        for f in fl[1:]:
+            ra, rb = find(fl[0]), find(f)
+            if ra != rb: parent[ra] = rb
+    patch_area = {}
+    for fi in range(len(faces)):
+        if steep_ok[fi]:
+            r = find(fi); patch_area[r] = patch_area.get(r, 0) + info[fi]['area']
+    seen_area = sum(i['area'] for i in info if i and i['seen'])
+    steep_area = sum(info[f]['area'] for f in range(len(faces)) if steep_ok[f])
+    big_area = sum(info[f]['area'] for f in range(len(faces)) if steep_ok[f] and patch_area[find(f)] >= min_patch)
+    print(f'{path}: {len(pts)} vertices, {len(faces)} faces; seen by >= {min_views}: {seen_area:.1f} m2; '
+          f'steeper than {steep:g} deg: {steep_area:.1f} m2, of it in patches >= {min_patch:g} m2: {big_area:.1f} m2')
+    def hist(sel):
+        h = [0.0] * 9
+        for f in sel:
+            h[min(8, int(info[f]['tilt'] // 5))] += info[f]['area']
+        return h
+    def show(name, sel, wall=None):
+        tot = sum(info[f]['area'] for f in sel)
+        if tot == 0:
+            print(f'  {name}: no wall faces'); return
+        h = hist(sel)
+        tilts = sorted((info[f]['tilt'], info[f]['area']) for f in sel)
+        acc = 0; med = tilts[-1][0]
+        for t, a in tilts:
+            acc += a
+            if acc >= tot / 2: med = t; break
+        line = (f'  {name}: {len(sel)} faces {tot:.1f} m2, tilt from vertical median {med:.1f} deg; area by tilt: '
+                + ', '.join(f'{5*k}-{5*k+5}: {x:.1f}' for k, x in enumerate(h)))
+        if wall:
+            _, x0, y0, x1, y1, nx_, ny_ = wall
+            mn = [sum(info[f]['n'][i] * info[f]['area'] for f in sel) for i in range(3)]
+            az = math.degrees(math.atan2(mn[1], mn[0])) % 360
+            naz = math.degrees(math.atan2(ny_, nx_)) % 360
+            # plane through the wall faces' corners (total least squares)
+            vs = sorted({v for f in sel for v in faces[f]})
+            m = [sum(pts[v][i] for v in vs) / len(vs) for i in range(3)]
+            C = [[sum((pts[v][i] - m[i]) * (pts[v][j] - m[j]) for v in vs) for j in range(3)] for i in range(3)]
+            nrm = smallest_eigvec(C)
+            ptilt = math.degrees(math.asin(min(1.0, abs(nrm[2]) / math.sqrt(sum(x * x for x in nrm)))))
+            res = [sum((pts[v][i] - m[i]) * nrm[i] for i in range(3)) for v in vs]
+            rms = math.sqrt(sum(r * r for r in res) / len(res))
+            line += (f'; mean normal azimuth {az:.0f} (line {naz:.0f}); plane through {len(vs)} corners: '
+                     f'tilt from vertical {ptilt:.1f} deg, rms {rms:.2f} m')
+            # offset from the line by height (vertical profile)
+            prof = {}
+            for v in vs:
+                o = (pts[v][0] - x0) * nx_ + (pts[v][1] - y0) * ny_
+                prof.setdefault(math.floor(pts[v][2]), []).append(o)
+            line += '; offset from the line by height (m: median offset, n): ' + ', '.join(
+                f'{z}: {sorted(o)[len(o)//2]:+.2f} ({len(o)})' for z, o in sorted(prof.items()))
+        print(line)
+    allsel = []
+    for name, x0, y0, x1, y1 in walls:
+        dx, dy = x1 - x0, y1 - y0; L = math.hypot(dx, dy); d = (dx / L, dy / L)
+        # outward normal: the side the faces' normals point to, decided below by the majority
+        n0 = (d[1], -d[0])
+        sel = []
+        for f in range(len(faces)):
+            if not steep_ok[f] or patch_area[find(f)] < min_patch: continue
+            cx, cy, _ = info[f]['cen']
+            t = (cx - x0) * d[0] + (cy - y0) * d[1]; o = (cx - x0) * n0[0] + (cy - y0) * n0[1]
+            if -1 <= t <= L + 1 and abs(o) <= band: sel.append(f)
+        s = sum((info[f]['n'][0] * n0[0] + info[f]['n'][1] * n0[1]) * info[f]['area'] for f in sel)
+        n = n0 if s >= 0 else (-n0[0], -n0[1])
+        show(f'{name} ({x0:g},{y0:g})-({x1:g},{y1:g})', sel, (name, x0, y0, x1, y1, n[0], n[1]))
+        allsel += [f for f in sel if f not in allsel]
+    if walls:
+        show('all walls', allsel)
+
+def smallest_eigvec(C):
+    # symmetric 3x3: inverse iteration on C + tiny shift (Jacobi would do as well)
+    import itertools
+    a = [row[:] for row in C]
+    V = [[1.0 if i == j else 0.0 for j in range(3)] for i in range(3)]
+    for _ in range(50):
+        p, q = max(((i, j) for i, j in itertools.combinations(range(3), 2)), key=lambda ij: abs(a[ij[0]][ij[1]]))
+        if abs(a[p][q]) < 1e-15: break
+        th = 0.5 * math.atan2(2 * a[p][q], a[q][q] - a[p][p])
+        c, s = math.cos(th), math.sin(th)
+        for k in range(3):
+            akp, akq = a[k][p], a[k][q]
+            a[k][p] = c * akp - s * akq; a[k][q] = s * akp + c * akq
+        for k in range(3):
+            apk, aqk = a[p][k], a[q][k]
+            a[p][k] = c * apk - s * aqk; a[q][k] = s * apk + c * aqk
+        for k in range(3):
+            vkp, vkq = V[k][p], V[k][q]
+            V[k][p] = c * vkp - s * vkq; V[k][q] = s * vkp + c * vkq
+    i = min(range(3), key=lambda i: a[i][i])
+    return [V[k][i] for k in range(3)]
+
+if __name__ == '__main__':
+    main()
