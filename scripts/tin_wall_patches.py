@@ -56,7 +56,7 @@ def main():
     if not args or args[0].startswith('-'):
         sys.exit(__doc__ or 'usage: tin_wall_patches.py TIN --wall NAME X0 Y0 X1 Y1 ...')
     path = args.pop(0)
-    walls = []; min_views = 2; min_patch = 4.0; band = 2.5; steep = 45.0
+    walls = []; min_views = 2; min_patch = 4.0; band = 2.5; steep = 45.0; step = 1.0
     while args:
         a = args.pop(0)
         if a == '--wall':
@@ -65,6 +65,7 @@ def main():
         elif a == '--min-patch': min_patch = float(args.pop(0))
         elif a == '--band': band = float(args.pop(0))
         elif a == '--steep': steep = float(args.pop(0))
+        elif a == '--section-step': step = float(args.pop(0))
         else: sys.exit(f'unknown argument {a}')
     pts, views, faces = read_ply(path)
     info = []
@@ -137,6 +138,18 @@ def main():
             rms = math.sqrt(sum(r * r for r in res) / len(res))
             line += (f'; mean normal azimuth {az:.0f} (line {naz:.0f}); plane through {len(vs)} corners: '
                      f'tilt from vertical {ptilt:.1f} deg, rms {rms:.2f} m')
+            # the wall's body: corners in the middle 60 % of the wall faces' height range
+            # (no foot, no eave rounding)
+            zs = sorted(pts[v][2] for v in vs)
+            lo, hi = zs[int(0.05 * (len(zs) - 1))], zs[int(0.95 * (len(zs) - 1))]
+            body = [v for v in vs if lo + 0.2 * (hi - lo) <= pts[v][2] <= hi - 0.2 * (hi - lo)]
+            if len(body) >= 4:
+                mb = [sum(pts[v][i] for v in body) / len(body) for i in range(3)]
+                Cb = [[sum((pts[v][i] - mb[i]) * (pts[v][j] - mb[j]) for v in body) for j in range(3)] for i in range(3)]
+                nb = smallest_eigvec(Cb)
+                btilt = math.degrees(math.asin(min(1.0, abs(nb[2]) / math.sqrt(sum(x * x for x in nb)))))
+                brms = math.sqrt(sum(sum((pts[v][i] - mb[i]) * nb[i] for i in range(3)) ** 2 for v in body) / len(body))
+                line += f'; body ({lo + 0.2 * (hi - lo):.1f}-{hi - 0.2 * (hi - lo):.1f} m, {len(body)} corners): tilt {btilt:.1f} deg, rms {brms:.2f} m'
             # offset from the line by height (vertical profile)
             prof = {}
             for v in vs:
@@ -145,7 +158,7 @@ def main():
             line += '; offset from the line by height (m: median offset, n): ' + ', '.join(
                 f'{z}: {sorted(o)[len(o)//2]:+.2f} ({len(o)})' for z, o in sorted(prof.items()))
         print(line)
-    allsel = []
+    allsel = []; leans = []
     for name, x0, y0, x1, y1 in walls:
         dx, dy = x1 - x0, y1 - y0; L = math.hypot(dx, dy); d = (dx / L, dy / L)
         # outward normal: the side the faces' normals point to, decided below by the majority
@@ -160,8 +173,70 @@ def main():
         n = n0 if s >= 0 else (-n0[0], -n0[1])
         show(f'{name} ({x0:g},{y0:g})-({x1:g},{y1:g})', sel, (name, x0, y0, x1, y1, n[0], n[1]))
         allsel += [f for f in sel if f not in allsel]
+        leans += sections(pts, faces, x0, y0, d, n, L, band, step, name)
     if walls:
         show('all walls', allsel)
+        print_leans('all walls', leans)
+
+def print_leans(name, leans):
+    if not leans:
+        print(f'  {name}: no section with a wall run'); return
+    h = [0] * 10
+    for t, _ in leans: h[min(9, int(t // 5))] += 1
+    ts = sorted(t for t, _ in leans)
+    print(f'  {name} sections: {len(leans)} with a wall run, lean from vertical median {ts[len(ts)//2]:.1f} deg, '
+          f'run height median {sorted(r for _, r in leans)[len(leans)//2]:.1f} m; sections by lean: '
+          + ', '.join(f'{5*k}-{5*k+5}: {c}' for k, c in enumerate(h[:9])) + f', >45: {h[9]}')
+
+def sections(pts, faces, x0, y0, d, n, L, band, step, name):
+    # Vertical sections across the wall every `step` m: the TIN cut by the plane, the outermost
+    # crossing (along the outward normal n, within band + 2 m of the line) at every 0.25 m of
+    # height; the wall run is the longest stretch of heights where the profile is steeper than
+    # 45 degrees (|d offset| < d z), at least 2 m high; its lean is the slope of a straight line
+    # fitted to offset(z) over the run.
+    leans = []
+    t = 0.5 * step
+    while t < L:
+        px, py = x0 + t * d[0], y0 + t * d[1]
+        segs = []
+        for f in faces:
+            P = [pts[i] for i in f]
+            s = [(p[0] - px) * d[0] + (p[1] - py) * d[1] for p in P]
+            if max(s) < 0 or min(s) > 0: continue
+            hits = []
+            for a in range(3):
+                b = (a + 1) % 3
+                if (s[a] < 0) != (s[b] < 0):
+                    u = s[a] / (s[a] - s[b]); q = [P[a][k] + u * (P[b][k] - P[a][k]) for k in range(3)]
+                    hits.append(((q[0] - px) * n[0] + (q[1] - py) * n[1], q[2]))
+            if len(hits) == 2: segs.append(hits)
+        t += step
+        if not segs: continue
+        zmin = min(min(h[1] for h in sg) for sg in segs); zmax = max(max(h[1] for h in sg) for sg in segs)
+        prof = []
+        z = math.floor(zmin * 4) / 4 + 0.25
+        while z < zmax:
+            xs = []
+            for a, b in segs:
+                if (a[1] - z) * (b[1] - z) < 0:
+                    u = (z - a[1]) / (b[1] - a[1]); o = a[0] + u * (b[0] - a[0])
+                    if abs(o) <= band + 2: xs.append(o)
+            prof.append((z, max(xs) if xs else None))
+            z += 0.25
+        best = []; cur = []
+        for k in range(len(prof)):
+            ok = prof[k][1] is not None and cur and abs(prof[k][1] - cur[-1][1]) < 0.25
+            if ok: cur.append(prof[k])
+            else:
+                cur = [prof[k]] if prof[k][1] is not None else []
+            if len(cur) > len(best): best = list(cur)
+        if len(best) < 9: continue  # 2 m
+        zs = [p[0] for p in best]; os_ = [p[1] for p in best]
+        mz = sum(zs) / len(zs); mo = sum(os_) / len(os_)
+        slope = sum((a - mz) * (b - mo) for a, b in zip(zs, os_)) / sum((a - mz) ** 2 for a in zs)
+        leans.append((math.degrees(math.atan(abs(slope))), zs[-1] - zs[0]))
+    print_leans(name, leans)
+    return leans
 
 def smallest_eigvec(C):
     # symmetric 3x3: inverse iteration on C + tiny shift (Jacobi would do as well)
