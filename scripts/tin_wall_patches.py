@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # Usage: python3 scripts/tin_wall_patches.py RUN/tin.ply --wall NAME X0 Y0 X1 Y1 [--wall ...]
-#          [--min-views 2] [--min-patch 4] [--band 2.5] [--steep 45]
+#          [--min-views 2] [--min-patch 4] [--band 2.5] [--steep 45] [--section-step 1]
 # Wall faces of a facets TIN (docs/EXPERIMENTS.md, boruszyn_kap walls), told apart from roof,
 # ground and spikes: a face counts as wall when
 #   - all three corners are seen by >= --min-views images (tin.ply `views`),
@@ -11,7 +11,12 @@
 # Reported per wall and over all walls: area histogram of the tilt from vertical (elevation of
 # the face normal above the horizontal) in 5-degree bins, the azimuth of the area-weighted mean
 # normal against the line's normal, a total-least-squares plane through the wall faces' corners
-# (its tilt from vertical) and the horizontal offset of the wall from the line by height.
+# (its tilt from vertical; "body": corners in the middle 60 % of their height range; both are
+# ill-conditioned on long crumpled walls) and the horizontal offset of the wall from the line by
+# height. Sections (--section-step m, default 1): the TIN cut across the line, the outermost
+# crossing at every 0.25 m of height; the wall run is the longest stretch steeper than 45 degrees
+# and at least 2 m high, its lean from vertical the slope of a line fitted to offset(height);
+# histogram of the sections by lean.
 import math, struct, sys
 
 def read_ply(path):
