@@ -1,5 +1,6 @@
 #include "apps/export_command.h"
 
+#include <Eigen/Core>
 #include <exception>
 #include <filesystem>
 #include <fstream>
@@ -40,6 +41,26 @@ double FinestGroundPixel(const fs::path& report_path) {
   return pixel;
 }
 
+// The preview's up of a facade (ReconstructionReport::camera_up) from the run's
+// report.json; Z when the file or the entry is missing (runs before it was written).
+Eigen::Vector3d CameraUp(const fs::path& report_path) {
+  std::ifstream in(report_path);
+  if (!in) return Eigen::Vector3d::UnitZ();
+  nlohmann::json report;
+  try {
+    in >> report;
+  } catch (const std::exception& e) {
+    throw std::runtime_error(report_path.string() + ": not valid JSON: " + e.what());
+  }
+  const auto up = report.find("camera_up");
+  if (up == report.end()) return Eigen::Vector3d::UnitZ();
+  if (!up->is_array() || up->size() != 3 || !(*up)[0].is_number() || !(*up)[1].is_number() ||
+      !(*up)[2].is_number()) {
+    throw std::runtime_error(report_path.string() + ": camera_up is not 3 numbers");
+  }
+  return {(*up)[0].get<double>(), (*up)[1].get<double>(), (*up)[2].get<double>()};
+}
+
 }  // namespace
 
 std::vector<std::string> RunExport(const ExportArgs& args) {
@@ -56,6 +77,7 @@ std::vector<std::string> RunExport(const ExportArgs& args) {
   }
   ProductSurface surface = ProductSurfaceFromMesh(ReadPly(surface_path.string()), surface_path.string());
   if (!args.crs.empty()) surface.crs = args.crs;
+  if (options.preview) surface.up = CameraUp(run / "report.json");
   if (options.AnyRaster() && options.raster_pixel <= 0.0) {
     surface.default_raster_pixel = FinestGroundPixel(run / "report.json");
   }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <ctime>
 #include <exception>
 #include <filesystem>
@@ -35,6 +36,7 @@ constexpr double kClosedRejectK = 5.0;
 struct ReconstructArgs {
   std::string colmap, images, project, out;
   int levels = 3;
+  int finest_level = 0;
   double facet_pixels = ReconstructionOptions().facet_pixels;
   double lambda = AdjustmentOptions().lambda;
   std::string regularisation = "curvature";
@@ -126,6 +128,7 @@ void RunReconstruct(const ReconstructArgs& args) {
 
   ReconstructionOptions options;
   options.levels = args.levels;
+  options.finest_level = args.finest_level;
   options.facet_pixels = args.facet_pixels;
   options.filter = PyramidFilterFromName(args.filter);
   options.adjustment.lambda = args.lambda;
@@ -197,11 +200,13 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.adjustment.sector_regularisation = args.sector_regularisation;
   options.windows.occluders = !args.no_occluders;
   // Level images in memory while they fit the budget, else tiled on disk and read per
-  // window (pyramid: 4/3 of the originals; float per channel).
+  // window (pyramid: 4/3 of the finest kept level; float per channel).
   double pyramid_mb = 0.0;
   for (const auto& image : block.images) {
     const Camera& camera = block.CameraOf(image);
-    pyramid_mb += 4.0 / 3.0 * camera.width * camera.height * (args.colour ? 3 : 1) * 4.0 / (1024.0 * 1024.0);
+    // Levels from --finest-level up: 4/3 of that level's pixels.
+    pyramid_mb += 4.0 / 3.0 * std::pow(0.25, args.finest_level) * camera.width * camera.height *
+                  (args.colour ? 3 : 1) * 4.0 / (1024.0 * 1024.0);
   }
   if (args.tiled_images || pyramid_mb > args.image_memory_mb) {
     options.image_cache_dir = (std::filesystem::path(args.out) / ".image-cache").string();
@@ -274,6 +279,10 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--project", args->project, "native project file (JSON)");
   sub->add_option("--out", args->out, "output folder")->required();
   sub->add_option("--levels", args->levels, "image pyramid levels (1 = no pyramid)")->capture_default_str();
+  sub->add_option("--finest-level", args->finest_level,
+                  "last adjusted pyramid level (0 = the original images; K: products at 2^K times their "
+                  "ground pixel, levels levels-1..K adjusted)")
+      ->capture_default_str();
   sub->add_option("--facet-pixels", args->facet_pixels,
                   "edge of a grey facet in pixels of each level (a triangle edge is 4 facets)")
       ->capture_default_str();

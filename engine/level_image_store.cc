@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <mutex>
 #include <stdexcept>
+#include <string>
 
 #include "visibility/image_selection.h"
 
@@ -13,6 +14,9 @@ namespace facets {
 LevelImageStore::LevelImageStore(const ImageBlock& block, const LevelImageStoreOptions& options)
     : block_(block), options_(options) {
   if (options.levels < 1) throw std::invalid_argument("LevelImageStore: levels must be >= 1");
+  if (options.first_level < 0 || options.first_level >= options.levels) {
+    throw std::invalid_argument("LevelImageStore: first_level must lie in 0..levels-1");
+  }
   const size_t n = block.images.size();
   cameras_.resize(n);
   if (cached()) {
@@ -30,8 +34,9 @@ LevelImageStore::LevelImageStore(const ImageBlock& block, const LevelImageStoreO
     cameras_[k].push_back(block.CameraOf(block.images[k]));
     for (int l = 1; l < options.levels; ++l) cameras_[k].push_back(cameras_[k].back().Scaled(0.5));
     if (cached()) {
-      for (int l = 0; l < options.levels; ++l) WriteTiledFloatImage(LevelPath(k, l), pyramid[l]);
+      for (int l = options.first_level; l < options.levels; ++l) WriteTiledFloatImage(LevelPath(k, l), pyramid[l]);
     } else {
+      for (int l = 0; l < options.first_level; ++l) pyramid[l] = ImagePlanes{};  // not used: freed
       pyramids_[k] = std::move(pyramid);
     }
   });
@@ -45,7 +50,7 @@ LevelImageStore::LevelImageStore(const ImageBlock& block, const LevelImageStoreO
   channels_ = n > 0 ? channels[0] : 1;
   if (cached()) {
     for (size_t k = 0; k < n; ++k)
-      for (int l = 0; l < options.levels; ++l) written_.push_back(LevelPath(k, l));
+      for (int l = options.first_level; l < options.levels; ++l) written_.push_back(LevelPath(k, l));
   }
 }
 
@@ -67,7 +72,15 @@ LevelImage LevelImageStore::Make(size_t image, int level, const ImagePlanes* pix
           block_.images[image].cam_from_world, pixels};
 }
 
+void LevelImageStore::CheckLevel(int level) const {
+  if (level < options_.first_level || level >= options_.levels) {
+    throw std::logic_error("LevelImageStore: level " + std::to_string(level) + " is not kept (levels " +
+                           std::to_string(options_.first_level) + ".." + std::to_string(options_.levels - 1) + ")");
+  }
+}
+
 std::vector<LevelImage> LevelImageStore::Whole(int level, ImageStorage* storage) const {
+  CheckLevel(level);
   std::vector<LevelImage> images;
   for (size_t k = 0; k < block_.images.size(); ++k) {
     if (!cached()) {
@@ -84,6 +97,7 @@ std::vector<LevelImage> LevelImageStore::Whole(int level, ImageStorage* storage)
 
 std::vector<LevelImage> LevelImageStore::Seeing(int level, const Eigen::AlignedBox3d& box,
                                                 ImageStorage* storage, int margin_px) const {
+  CheckLevel(level);
   std::vector<LevelImage> images;
   for (size_t k = 0; k < block_.images.size(); ++k) {
     const Camera& camera = cameras_[k][level];

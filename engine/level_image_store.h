@@ -24,6 +24,10 @@ using ImageStorage = std::vector<std::unique_ptr<ImagePlanes>>;
 
 struct LevelImageStoreOptions {
   int levels = 1;
+  // Levels below this one are built (the pyramid starts at the image) but not kept:
+  // a run that stops at a coarser finest level (ReconstructionOptions::finest_level)
+  // does not hold the full-resolution images. Asking for them throws std::logic_error.
+  int first_level = 0;
   PyramidFilter filter = PyramidFilter::kBinomial5;
   bool colour = false;          // keep the channels, else their mean
   std::string cache_dir;        // empty: every level in memory; else tiled TIFFs there
@@ -55,6 +59,7 @@ class LevelImageStore {
 
  private:
   std::string LevelPath(size_t image, int level) const;
+  void CheckLevel(int level) const;  // throws std::logic_error for a level not kept
   LevelImage Make(size_t image, int level, const ImagePlanes* pixels) const;
 
   const ImageBlock& block_;

@@ -97,6 +97,7 @@ ProductSurface MakeProductSurface(const Reconstruction& r, const ImageBlock& blo
   s.origin = block.origin;
   s.crs = block.crs;
   s.default_raster_pixel = r.report.levels.empty() ? 0.0 : r.report.levels.back().ground_pixel;
+  s.up = r.report.camera_up;
   return s;
 }
 
@@ -203,7 +204,11 @@ std::vector<std::string> WriteSurfaceProducts(const ProductSurface& s, const std
     const ExportSurface surface = MakeExportSurface(s);
     if (options.glb) WriteGlb(path("surface.glb"), surface);
     if (options.vrml) WriteVrml(path("surface.wrl"), surface);
-    if (options.preview) WritePreview(path("preview.png"), surface);
+    if (options.preview) {
+      PreviewOptions preview;
+      preview.up = s.up;
+      WritePreview(path("preview.png"), surface, preview);
+    }
   }
   if (options.AnyRaster()) {
     Eigen::AlignedBox3d box;

@@ -53,6 +53,9 @@ struct ProductSurface {
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // global = origin + local
   std::string crs;                                    // "" unknown
   double default_raster_pixel = 0.0;  // m; 0 = none (then ProductOptions::raster_pixel is needed)
+  // Up in the preview of a facade (PreviewOptions::up): the cameras' mean up direction
+  // (ReconstructionReport::camera_up; `facets export` reads it from report.json).
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
 };
 
 // Per tessellation node: the TIN vertex values of the face that made the node,

@@ -164,6 +164,7 @@ void ReconstructionOptions::Check() const {
     throw std::invalid_argument("reconstruction options: " + what);
   };
   if (levels < 1 || levels > 10) fail("levels must lie in 1..10");
+  if (finest_level < 0 || finest_level >= levels) fail("finest_level must lie in 0..levels-1");
   if (!(facet_pixels > 0.5)) fail("facet_pixels must be > 0.5");
   if (lifting_steps < 0) fail("lifting_steps must be >= 0");
   if (!(break_off_gsd >= 0.0)) fail("break_off_gsd must be >= 0");
@@ -196,6 +197,7 @@ std::string ReconstructionReport::Json() const {
   json j;
   j["start_height"] = start_height;
   j["start_surface"] = start_surface;
+  j["camera_up"] = {camera_up.x(), camera_up.y(), camera_up.z()};
   if (!start_detail.empty()) j["start_detail"] = start_detail;
   j["seconds_total"] = seconds_total;
   j["seconds_images"] = seconds_images;
@@ -312,6 +314,12 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
   if (block.images.size() < 2) throw std::runtime_error("reconstruction needs at least 2 images");
   Reconstruction result;
   const RegionOfInterest roi = ChooseRoi(block, options);
+  {
+    Eigen::Vector3d up = Eigen::Vector3d::Zero();
+    for (const auto& image : block.images) up -= image.cam_from_world.rotation.conjugate() * Eigen::Vector3d::UnitY();
+    up /= static_cast<double>(block.images.size());
+    if (up.norm() >= 0.5) result.report.camera_up = up.normalized();
+  }
   // A closed start (objects) replaces the plane; its centre sets the ground pixel.
   std::optional<ClosedStart> closed;
   if (options.start_closed || !options.closed.mesh_file.empty()) {
@@ -334,13 +342,16 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
   if (closed) centre = closed->centre;
   const double gsd0 = GroundPixel(block, centre);
   const int num_levels = options.levels;
+  const int finest = options.finest_level;
 
   // Images and their pyramids; cameras scaled level by level exactly like the images.
   say("stage images: reading " + std::to_string(block.images.size()) + " images, " +
-      std::to_string(num_levels) + " pyramid levels");
+      std::to_string(num_levels) + " pyramid levels" +
+      (finest > 0 ? ", adjusted down to level " + std::to_string(finest) : std::string()));
   const auto images_start = std::chrono::steady_clock::now();
   LevelImageStoreOptions store_options;
   store_options.levels = num_levels;
+  store_options.first_level = finest;
   store_options.filter = options.filter;
   store_options.colour = options.colour;
   if (options.image_cache_dir) {
@@ -389,7 +400,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
                                ? options.break_off_gsd * gsd0 * std::pow(2.0, level)
                                : adjustment.break_off * std::pow(2.0, level);
     if (adjustment.max_step == 0.0) adjustment.max_step = 0.5 * edge_length(level);
-    adjustment.compute_precision = options.adjustment.compute_precision && level == 0;
+    adjustment.compute_precision = options.adjustment.compute_precision && level == finest;
     if (closed) adjustment.rounded_ridges = false;
     return adjustment;
   };
@@ -444,7 +455,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     mesh = StartSurface(block, roi, start_height, edge_length(coarsest), options, &result.report);
   }
   say("stage start: " + result.report.start_surface + (result.report.start_detail.empty() ? "" : ": " + result.report.start_detail));
-  for (int level = coarsest; level >= 0; --level) {
+  for (int level = coarsest; level >= finest; --level) {
     int smoothed = 0;
     const auto level_start = std::chrono::steady_clock::now();
     const AdjustmentOptions adjustment_options = level_options(level);
@@ -481,11 +492,11 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     level_report.vertices = static_cast<int>(mesh.n_vertices());
     level_report.faces = static_cast<int>(mesh.n_faces());
     say("stage adjust: level " + std::to_string(level) + " (" + std::to_string(coarsest - level + 1) +
-        "/" + std::to_string(num_levels) + "), " + std::to_string(mesh.n_faces()) +
+        "/" + std::to_string(num_levels - finest) + "), " + std::to_string(mesh.n_faces()) +
         " faces, ground pixel " + std::to_string(level_report.ground_pixel) + " m, break-off " +
         std::to_string(level_report.break_off) + " m");
     LevelAdjustment adjusted = AdjustLevelInWindows(&mesh, window_images(level), level_options(level),
-                                                    options.windows, level == 0, options.progress);
+                                                    options.windows, level == finest, options.progress);
     // Vertices no image saw (a sheet folded under a roof that rose) fall back to the
     // membrane spanned by the seen surface around them (mesh/local_ops.h).
     auto relax_unseen = [&]() {
@@ -521,7 +532,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
           std::to_string(split.splits) + " splits, " + std::to_string(split.flips) + " flips, " +
           std::to_string(mesh.n_faces()) + " faces; sigma0 before " + std::to_string(adjusted.summary.sigma0));
       adjusted = AdjustLevelInWindows(&mesh, window_images(level), level_options(level), options.windows,
-                                      level == 0, options.progress);
+                                      level == finest, options.progress);
       level_report.wall_passes.push_back(
           {split.splits, split.flips, static_cast<int>(mesh.n_faces()), adjusted.summary.sigma0});
     }
@@ -535,7 +546,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
           &mesh, DetectCreaseEdges(mesh, adjustment_options.crease_angle_deg, adjustment_options.rounded_ridges));
       if (straight.moved == 0) break;
       LevelAdjustment again = AdjustLevelInWindows(&mesh, window_images(level), level_options(level),
-                                                   options.windows, level == 0, options.progress);
+                                                   options.windows, level == finest, options.progress);
       const bool better = again.summary.sigma0 < adjusted.summary.sigma0;
       say("  level " + std::to_string(level) + " straightening " + std::to_string(round + 1) + ": " +
           std::to_string(straight.components) + " straight crease lines, " + std::to_string(straight.moved) +
@@ -556,8 +567,8 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     // surface points move; the grey values there were never observed anyway. Not for
     // closed starts: their rims, seen edge-on, count as unseen (about 200 vertices on the
     // synthetic object), and relaxing them cost its completeness (0.95 -> 0.947).
-    const bool relax_now = level > 0 || !closed;
-    if (relax_now && relax_unseen() > 0 && level == 0) {
+    const bool relax_now = level > finest || !closed;
+    if (relax_now && relax_unseen() > 0 && level == finest) {
       const std::vector<bool> creases =
           DetectCreaseEdges(mesh, adjustment_options.crease_angle_deg, adjustment_options.rounded_ridges);
       UpdateTessellationPoints(BuildPatches(mesh, ComputeCornerNormals(mesh, creases)), &adjusted.tessellation);
@@ -575,7 +586,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
         level_report.hull_rim_pushed = PushOntoVisualHullRims(
             *closed, options.closed.hull_rim_edges * edge_length(level), options.closed.hull_rim_cos, &mesh);
       }
-      if (level == 0 && level_report.hull_clamped + level_report.hull_rim_pushed > 0) {
+      if (level == finest && level_report.hull_clamped + level_report.hull_rim_pushed > 0) {
         // Same topology and creases: only the products' surface points move.
         UpdateTessellationPoints(BuildPatches(mesh, ComputeCornerNormals(mesh, creases)),
                                  &adjusted.tessellation);
@@ -594,7 +605,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
         UpdateVertexNormals(&mesh);
         level_report.crossing_untangled = untangled.pairs_before;
         level_report.untangle_moved = untangled.vertices_moved;
-        if (level == 0) {
+        if (level == finest) {
           // Same topology: only the products' surface points move.
           const std::vector<bool> creases = DetectCreaseEdges(mesh, adjustment_options.crease_angle_deg,
                                                           adjustment_options.rounded_ridges);
@@ -634,7 +645,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
           std::to_string(it.cg_iterations) + " CG iterations");
     }
     level_report.seconds = Seconds(level_start);
-    if (level == 0) {
+    if (level == finest) {
       result.tessellation = std::move(adjusted.tessellation);
       result.grey = std::move(adjusted.grey);
       result.vertex_sigma = level_report.window.vertex_sigma;

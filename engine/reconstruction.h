@@ -28,6 +28,11 @@ namespace facets {
 struct ReconstructionOptions {
   // Pyramid levels: 1 = the original images only.
   int levels = 3;
+  // The last adjusted pyramid level (0 = the original images): levels levels-1 down to
+  // finest_level are adjusted, the products come from finest_level, its ground pixel is
+  // 2^finest_level of the images'. A large scene (a whole facade at 3 mm image ground
+  // pixels) at a coarser resolution in reasonable time; the finer images are not kept.
+  int finest_level = 0;
   PyramidFilter filter = PyramidFilter::kBinomial5;
   // Options of every window adjustment; break_off is the finest level's bound and is
   // doubled per coarser level.
@@ -139,7 +144,7 @@ struct WallPass {
 };
 
 struct LevelReport {
-  int level = 0;               // 0 = finest
+  int level = 0;               // pyramid level, 0 = the original images
   double ground_pixel = 0.0;   // mean ground pixel size of the level's images (m)
   double edge_length = 0.0;    // target TIN edge length (m)
   double break_off = 0.0;      // interior break-off bound of the level (m)
@@ -175,6 +180,10 @@ struct ReconstructionReport {
   double start_height = 0.0;
   std::string start_surface = "plane";  // or "tiepoints", "fitted plane"
   std::string start_detail;             // TiePointStartReport::Brief()
+  // The images' mean up direction (minus their y axes in the world), unit; Z when they
+  // cancel out (less than half a unit long: nadir images flown in all directions). The
+  // preview's up for a facade (io/preview.h).
+  Eigen::Vector3d camera_up = Eigen::Vector3d::UnitZ();
   std::vector<LevelReport> levels;  // in processing order, coarsest first
   double seconds_total = 0.0;
   double seconds_images = 0.0;
@@ -189,7 +198,7 @@ struct Reconstruction {
   int channels = 1;
   std::vector<double> grey;  // per tessellation node and channel
   ReconstructionReport report;
-  // Of the finest level, per TIN vertex.
+  // Of the finest adjusted level (ReconstructionOptions::finest_level), per TIN vertex.
   std::vector<double> vertex_sigma;
   std::vector<int> vertex_views;
   std::vector<uint8_t> vertex_flags;

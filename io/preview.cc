@@ -25,7 +25,7 @@ struct Visibility {
   std::vector<float> w1, w2;
 };
 
-Visibility RasteriseSamples(const ExportSurface& surface, const PreviewOptions& o) {
+Visibility RasteriseSamples(const ExportSurface& surface, const PreviewOptions& o, const PreviewFrame& frame) {
   const int ss = o.supersampling;
   Visibility vis;
   vis.width = o.panel_width * ss;
@@ -37,8 +37,8 @@ Visibility RasteriseSamples(const ExportSurface& surface, const PreviewOptions& 
   std::vector<double> depth(n, -std::numeric_limits<double>::infinity());
 
   // Camera frame: `toward` points at the viewer, right and up span the picture.
-  const Eigen::Vector3d toward = Direction(o.view_azimuth_deg, o.view_elevation_deg);
-  const Eigen::Vector3d right = (-toward).cross(Eigen::Vector3d::UnitZ()).normalized();
+  const Eigen::Vector3d toward = frame.toward;
+  const Eigen::Vector3d right = (-toward).cross(frame.vertical).normalized();
   const Eigen::Vector3d up = right.cross(-toward);
   // Picture coordinates relative to the surface's centre (local coordinates can be far
   // from zero; the differences stay exact enough in double).
@@ -89,6 +89,47 @@ Visibility RasteriseSamples(const ExportSurface& surface, const PreviewOptions& 
 
 }  // namespace
 
+PreviewFrame ChoosePreviewFrame(const ExportSurface& surface, const PreviewOptions& o) {
+  PreviewFrame frame;
+  frame.toward = Direction(o.view_azimuth_deg, o.view_elevation_deg);
+  frame.light = Direction(o.light_azimuth_deg, o.light_elevation_deg);
+  frame.vertical = Eigen::Vector3d::UnitZ();
+  if (!o.facade_frame) return frame;
+  // Area-weighted mean normal (the triangles' winding) and the area.
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  double area = 0.0;
+  for (const Eigen::Vector3i& t : surface.triangles) {
+    const Eigen::Vector3d n = 0.5 * (surface.vertices[t[1]] - surface.vertices[t[0]])
+                                        .cross(surface.vertices[t[2]] - surface.vertices[t[0]]);
+    sum += n;
+    area += n.norm();
+  }
+  if (!(area > 0.0) || sum.norm() < o.facade_min_flatness * area) return frame;  // closed or crumpled
+  const Eigen::Vector3d zenith = sum.normalized();
+  if (std::abs(zenith.z()) >= std::cos(o.facade_min_tilt_deg * M_PI / 180.0)) return frame;  // faces +-Z
+  // North: `up` in the surface's plane; Z, then X when `up` is (nearly) the normal.
+  Eigen::Vector3d north = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& candidate : {o.up, Eigen::Vector3d::UnitZ().eval(), Eigen::Vector3d::UnitX().eval()}) {
+    if (!(candidate.norm() > 0.0)) continue;
+    const Eigen::Vector3d c = candidate.normalized();
+    const Eigen::Vector3d in_plane = c - c.dot(zenith) * zenith;
+    if (in_plane.norm() > 0.2) {
+      north = in_plane.normalized();
+      break;
+    }
+  }
+  const Eigen::Vector3d east = north.cross(zenith);
+  auto direction = [&](double azimuth_deg, double elevation_deg) {
+    const Eigen::Vector3d d = Direction(azimuth_deg, elevation_deg);
+    return Eigen::Vector3d(d.x() * east + d.y() * north + d.z() * zenith);
+  };
+  frame.toward = direction(o.view_azimuth_deg, o.facade_view_elevation_deg);
+  frame.light = direction(o.light_azimuth_deg, o.light_elevation_deg);
+  frame.vertical = north;
+  frame.facade = true;
+  return frame;
+}
+
 void PreviewOptions::Check() const {
   auto fail = [](const std::string& m) { throw std::invalid_argument("preview options: " + m); };
   if (panel_width < 16 || panel_height < 16 || panel_width > 8192 || panel_height > 8192) {
@@ -102,6 +143,12 @@ void PreviewOptions::Check() const {
     fail("azimuths and elevations must be finite");
   }
   if (!(ambient >= 0.0 && ambient <= 1.0)) fail("ambient must be 0..1");
+  if (!(facade_view_elevation_deg > -90.0 && facade_view_elevation_deg < 90.0)) {
+    fail("facade_view_elevation_deg must be inside -90..90 (exclusive)");
+  }
+  if (!(facade_min_tilt_deg >= 0.0 && facade_min_tilt_deg <= 90.0)) fail("facade_min_tilt_deg must be 0..90");
+  if (!(facade_min_flatness >= 0.0 && facade_min_flatness <= 1.0)) fail("facade_min_flatness must be 0..1");
+  if (!up.allFinite()) fail("up must be finite");
   if (supersampling < 1 || supersampling > 8) fail("supersampling must be 1..8");
   if (margin_px < 0 || 2 * margin_px >= std::min(panel_width, panel_height)) {
     fail("margin_px must be >= 0 and leave room for the surface");
@@ -113,10 +160,11 @@ PreviewImage RenderPreview(const ExportSurface& surface, const PreviewOptions& o
   options.Check();
   surface.Check(what);
   if (surface.triangles.empty()) throw std::invalid_argument(what + ": the surface has no triangles");
-  const Visibility vis = RasteriseSamples(surface, options);
+  const PreviewFrame frame = ChoosePreviewFrame(surface, options);
+  const Visibility vis = RasteriseSamples(surface, options, frame);
 
-  const Eigen::Vector3d toward = Direction(options.view_azimuth_deg, options.view_elevation_deg);
-  const Eigen::Vector3d light = Direction(options.light_azimuth_deg, options.light_elevation_deg);
+  const Eigen::Vector3d toward = frame.toward;
+  const Eigen::Vector3d light = frame.light;
   const bool coloured = !surface.colors.empty();
   const int ch = surface.channels;
   // Per sample: shaded grey and textured RGB.

@@ -8,6 +8,15 @@
 // a panel (no perspective: the picture has no camera distance to choose, and parallel
 // lines stay parallel as on a map). Triangles are seen from both sides (open
 // surfaces); the shading normal is the facet normal turned towards the viewer.
+//
+// Facades: azimuths and elevations are given for a surface that faces +Z (terrain,
+// roofs). A surface whose area-weighted mean normal is tilted more than
+// facade_min_tilt_deg from the Z axis (a facade seen from the street; Z need not even
+// be up) is shown in its own frame instead: the mean normal plays the zenith, `up`
+// projected onto the surface's plane plays north (the top of the picture), so the
+// viewer looks at the front from facade_view_elevation_deg above its plane and the
+// light falls on the front as it falls on a map. Closed surfaces (mean normal near
+// zero) keep the Z frame.
 #pragma once
 
 #include <array>
@@ -26,6 +35,15 @@ struct PreviewOptions {
   // elevation above the horizon. 225 / 35: from the south-west, looking down obliquely.
   double view_azimuth_deg = 225.0;
   double view_elevation_deg = 35.0;
+  // The facade frame (see above): on when the mean normal is tilted more than this from
+  // Z and the surface is open (|mean normal| >= facade_min_flatness of its area).
+  bool facade_frame = true;
+  double facade_min_tilt_deg = 45.0;
+  double facade_min_flatness = 0.3;
+  double facade_view_elevation_deg = 60.0;
+  // World up for the facade frame's picture (the products set the cameras' mean up
+  // direction; Z is not up in every street-level model). Need not be unit length.
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
   // Where the light comes from (shaded panel): north-west, as on shaded relief maps.
   double light_azimuth_deg = 315.0;
   double light_elevation_deg = 45.0;
@@ -43,6 +61,14 @@ struct PreviewImage {
   int width = 0, height = 0;
   std::vector<std::uint8_t> rgb;  // row-major, 3 bytes per pixel, 8-bit display values
 };
+
+// The directions a preview is rendered with: towards the viewer, towards the light,
+// and the world direction that is up in the picture.
+struct PreviewFrame {
+  Eigen::Vector3d toward, light, vertical;
+  bool facade = false;  // the facade frame was chosen
+};
+PreviewFrame ChoosePreviewFrame(const ExportSurface& surface, const PreviewOptions& options);
 
 // Renders the two panels. Colours (linear 0..255 object grey values, which are image
 // grey values) are shown as they are, like the images show them; without colours the

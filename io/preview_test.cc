@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <iostream>
 #include <string>
+#include <utility>
 
 #include "io/image_io.h"
 #include "io/products_dir_for_testing.h"
@@ -119,6 +120,98 @@ TEST(Preview, TwoPanelsOfTheWholeSurfaceWrittenAsPng) {
   const double north = plane_grey(true), south = plane_grey(false);
   std::cout << "shaded roof planes: north-facing " << north << ", south-facing " << south << "\n";
   EXPECT_GT(north, south + 10.0);
+}
+
+
+// A facade as the fountain's model has it: a wall 8 m x 6 m in the x-z plane facing
+// +Y (towards the cameras), Z pointing DOWN, with horizontal grooves (relief) every
+// metre; grey 220 on the upper half (z < 0), 40 on the lower half.
+ExportSurface Facade() {
+  ExportSurface s;
+  const int nx = 33, nz = 25;
+  for (int k = 0; k < nz; ++k) {
+    for (int i = 0; i < nx; ++i) {
+      const double x = 0.25 * i - 4.0, z = 0.25 * k - 3.0;
+      const double groove = (k % 4 == 0) ? -0.1 : 0.0;
+      s.vertices.emplace_back(x, -11.0 + groove, z);
+      s.colors.push_back(z < 0.0 ? 220.0f : 40.0f);
+    }
+  }
+  for (int k = 0; k + 1 < nz; ++k) {
+    for (int i = 0; i + 1 < nx; ++i) {
+      const int a = k * nx + i;
+      // Normal (x along i) x (z along k) = -Y; wound the other way: +Y.
+      s.triangles.emplace_back(a, a + nx + 1, a + 1);
+      s.triangles.emplace_back(a, a + nx, a + nx + 1);
+    }
+  }
+  return s;
+}
+
+ImagePlanes Planes(const PreviewImage& picture) {
+  ImagePlanes planes;
+  planes.width = picture.width;
+  planes.height = picture.height;
+  planes.channels = 3;
+  const size_t n = static_cast<size_t>(picture.width) * picture.height;
+  planes.data.resize(3 * n);
+  for (size_t i = 0; i < n; ++i) {
+    for (int c = 0; c < 3; ++c) planes.data[c * n + i] = picture.rgb[3 * i + c];
+  }
+  return planes;
+}
+
+// Mean textured grey of the surface pixels in the upper and the lower half of the right panel.
+std::pair<double, double> UpperLowerGrey(const ImagePlanes& image, const PreviewOptions& o) {
+  double sum[2] = {0, 0};
+  long long count[2] = {0, 0};
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = o.panel_width; x < 2 * o.panel_width; ++x) {
+      bool background = true;
+      for (int c = 0; c < 3; ++c) background = background && image.at(c, x, y) == o.background[c];
+      if (background) continue;
+      const int half = y < image.height / 2 ? 0 : 1;
+      sum[half] += image.at(0, x, y);
+      ++count[half];
+    }
+  }
+  return {count[0] ? sum[0] / count[0] : 0.0, count[1] ? sum[1] / count[1] : 0.0};
+}
+
+// The products' preview of a facade: with the Z frame the wall is seen from behind and
+// below, its shaded panel dark (ambient only) and upside down; the facade frame looks at
+// its front with the cameras' up (here -Z) at the top and lights it.
+TEST(Preview, FacadeIsSeenFromTheFrontWithTheCamerasUpOnTop) {
+  const ExportSurface surface = Facade();
+  PreviewOptions options;
+  options.up = Eigen::Vector3d(0.02, -0.04, -1.0);  // the fountain's cameras: Z down
+  const PreviewFrame frame = ChoosePreviewFrame(surface, options);
+  EXPECT_TRUE(frame.facade);
+  EXPECT_GT(frame.toward.y(), 0.8);   // in front of the wall (its normal is +Y)
+  EXPECT_GT(frame.light.y(), 0.0);    // the light falls on the front
+  EXPECT_LT(frame.vertical.z(), -0.99);
+  PreviewOptions z_frame = options;
+  z_frame.facade_frame = false;
+  EXPECT_FALSE(ChoosePreviewFrame(surface, z_frame).facade);
+  // The gable roof keeps the Z frame, whatever `up` says.
+  EXPECT_FALSE(ChoosePreviewFrame(GableRoof(), options).facade);
+
+  const ImagePlanes facade = Planes(RenderPreview(surface, options));
+  const ImagePlanes old = Planes(RenderPreview(surface, z_frame));
+  const PanelStats shaded = Panel(facade, 0, options.panel_width, options);
+  const PanelStats shaded_old = Panel(old, 0, options.panel_width, options);
+  const auto [upper, lower] = UpperLowerGrey(facade, options);
+  const auto [upper_old, lower_old] = UpperLowerGrey(old, options);
+  std::cout << "facade preview: shaded mean " << shaded.mean_surface_grey << " (Z frame " << shaded_old.mean_surface_grey
+            << "), background " << shaded.background_share << " (Z frame " << shaded_old.background_share
+            << "); textured upper / lower half " << upper << " / " << lower << " (Z frame " << upper_old << " / "
+            << lower_old << ")\n";
+  EXPECT_LT(shaded_old.mean_surface_grey, 60.0);  // ambient 0.15 * 255 = 38 where unlit
+  EXPECT_GT(shaded.mean_surface_grey, 120.0);
+  EXPECT_GT(upper, lower + 100.0);          // the top of the wall at the top of the picture
+  EXPECT_LT(upper_old, lower_old - 100.0);  // the Z frame shows it upside down
+  EXPECT_LT(shaded.background_share, 0.6);
+  EXPECT_TRUE(shaded.border_is_background);
 }
 
 TEST(Preview, RejectsBadOptionsAndSurfaces) {

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-# Usage: python3 scripts/tin_plane_fit.py [--border-rings N] [--min-views V] RUN/tin.ply ...
+# Usage: python3 scripts/tin_plane_fit.py [--border-rings N] [--min-views V] [--box X0 Y0 Z0 X1 Y1 Z1] RUN/tin.ply ...
 # Total-least-squares plane through the tin.ply vertices, residuals against the per-vertex
 # sigma (docs/EXPERIMENTS.md, fountain wall).
 #   --border-rings N  leave out the vertices within N edge rings of the TIN's border (the
@@ -7,6 +7,9 @@
 #                     surface beyond the ROI cut off); 0 = keep all (default)
 #   --min-views V     leave out flagged vertices: seen by fewer than V images (the engine's
 #                     min_views, default 2) or without a sigma (fixed, not estimated)
+#   --box ...         fit only the vertices inside this box (local coordinates of tin.ply,
+#                     e.g. one flat wall area of a whole-facade run); the border rings are
+#                     still those of the whole TIN
 import collections, struct, sys, math
 
 
@@ -69,16 +72,18 @@ def smallest_eigvec(C):
 
 
 def main(argv):
-    rings, min_views, paths = 0, 0, []
+    rings, min_views, paths, box = 0, 0, [], None
     it = iter(argv)
     for a in it:
         if a == '--border-rings': rings = int(next(it))
         elif a == '--min-views': min_views = int(next(it))
+        elif a == '--box': box = [float(next(it)) for _ in range(6)]
         else: paths.append(a)
     for path in paths:
         vs, faces = read(path)
         ring = border_rings(len(vs), faces) if rings > 0 else [1 << 30] * len(vs)
-        keep = [v for v, r in zip(vs, ring) if r >= rings and
+        inside = lambda v: box is None or all(box[i] <= v[k] <= box[i + 3] for i, k in enumerate('xyz'))
+        keep = [v for v, r in zip(vs, ring) if r >= rings and inside(v) and
                 (min_views <= 0 or (v.get('views', min_views) >= min_views and v.get('sigma', 1.0) > 0.0))]
         n = len(keep)
         if n < 3:
@@ -92,7 +97,7 @@ def main(argv):
         rms = math.sqrt(sum(x*x for x in r)/n)
         sig = sorted(v['sigma'] for v in keep if 'sigma' in v)
         within = sum(1 for v, x in zip(keep, res) if abs(x) <= 3*v.get('sigma', 0.0)) / n * 100
-        what = f'{n} of {len(vs)} vertices'
+        what = f'{n} of {len(vs)} vertices' + ('' if box is None else ' in the box')
         if rings > 0: what += f' (border strip of {rings} rings left out'
         if min_views > 0: what += (', ' if rings > 0 else ' (') + f'flagged: < {min_views} views or no sigma, left out'
         if rings > 0 or min_views > 0: what += ')'

@@ -84,6 +84,10 @@ def main(argv):
     relief = math.sqrt(max(scatter ** 2 - own_rms ** 2, 0.0))
     vs, faces = read(tin)
     P = [(v['x'], v['y'], v['z']) for v in vs]
+    # Only the faces near the box (a whole-facade TIN has tens of thousands): a vertex
+    # within 0.5 m of it.
+    near = lambda p: all(roi[i] - 0.5 <= p[i] <= roi[i + 3] + 0.5 for i in range(3))
+    faces = [f for f in faces if any(near(P[i]) for i in f)]
     dist, plane_of_tin = [], []
     for k in keep:
         o = pts[k][0]

@@ -4,9 +4,11 @@
 
 #include <cmath>
 #include <iostream>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
+#include "engine/level_image_store.h"
 #include "engine/reconstruction.h"
 #include "io/colmap_io.h"
 #include "scenes/evaluate.h"
@@ -84,6 +86,81 @@ TEST(Reconstruct, SeedGableRoofWithTheBreakOffInGroundPixels) {
   ReconstructSeedGable(0.06, "facets_reconstruct_seed_gable_gsd");
 }
 
+// ReconstructionOptions::finest_level (`facets reconstruct --finest-level`): 3 pyramid
+// levels adjusted down to level 1 only. The products come from level 1: the seeds'
+// ground pixel (0.24 m on the original images) doubled, TIN edges of 4 facets of 2
+// level pixels, precision for every vertex; the roof fits within a tenth of a level-1
+// ground pixel; the finer images are not kept.
+TEST(Reconstruct, StopsAtACoarserFinestLevel) {
+  const RenderedScene rendered =
+      RenderAndRead("scenes/data/seed_gable_parallel.json", testing::TempDir() + "/facets_reconstruct_finest_level");
+  ReconstructionOptions options;
+  options.levels = 3;
+  options.finest_level = 1;
+  options.start = StartSurfaceKind::kPlane;
+  options.break_off_gsd = 0.06;
+  options.progress = [](const std::string& line) { std::cout << line << "\n"; };
+  const Reconstruction r = Reconstruct(rendered.block, options);
+  ASSERT_EQ(r.report.levels.size(), 2u);
+  EXPECT_EQ(r.report.levels[0].level, 2);
+  const LevelReport& finest = r.report.levels.back();
+  EXPECT_EQ(finest.level, 1);
+  // Ground pixel of the original images at the ROI centre, from the cameras.
+  const Eigen::Vector3d centre = 0.5 * (rendered.block.roi->min + rendered.block.roi->max);
+  std::vector<double> gsd;
+  for (const auto& image : rendered.block.images) {
+    const Camera& camera = rendered.block.CameraOf(image);
+    Eigen::Vector3d at = centre;
+    at.z() = r.report.start_height;
+    gsd.push_back((at - image.ProjectionCentre()).norm() / (0.5 * (camera.FocalX() + camera.FocalY())));
+  }
+  std::sort(gsd.begin(), gsd.end());
+  const double gsd0 = gsd[gsd.size() / 2];
+  std::cout << "ground pixel of the images " << gsd0 << " m, finest level " << finest.ground_pixel << " m\n";
+  EXPECT_NEAR(finest.ground_pixel, 2.0 * gsd0, 1e-9);
+  EXPECT_NEAR(finest.edge_length, 2.0 * kSubdivisions * 2.0 * gsd0, 1e-9);
+  // The TIN is the level-1 TIN: mean edge within 25 % of the target (the quality pass's band).
+  double length = 0.0;
+  for (auto eh : r.mesh.edges()) length += r.mesh.calc_edge_length(eh);
+  const double mean_edge = length / static_cast<double>(r.mesh.n_edges());
+  std::cout << "mean TIN edge " << mean_edge << " m, target " << finest.edge_length << " m, " << r.mesh.n_faces()
+            << " faces; " << r.report.BriefReport() << "\n";
+  EXPECT_NEAR(mean_edge, finest.edge_length, 0.25 * finest.edge_length);
+  EXPECT_EQ(static_cast<int>(r.mesh.n_faces()), finest.faces);
+  EXPECT_EQ(r.tessellation.NumFaces(), finest.faces);
+  ASSERT_EQ(r.vertex_sigma.size(), r.mesh.n_vertices());
+  int with_sigma = 0;
+  for (double s : r.vertex_sigma) with_sigma += s > 0.0 && std::isfinite(s) ? 1 : 0;
+  EXPECT_GT(with_sigma, 0.9 * r.mesh.n_vertices());
+  EXPECT_LT(finest.window.sigma0, 4.5);
+
+  MeshData surface;
+  surface.vertices = r.tessellation.points;
+  surface.faces = r.tessellation.triangles;
+  const EvaluationReport score = Evaluate(ReadTruthScene(rendered.dir), surface);
+  const RegionScore* roof = score.Region("roof");
+  ASSERT_NE(roof, nullptr);
+  std::cout << score.Table();
+  // Measured: median 0.0155 m (0.03 level-1 ground pixels), 98.8 % within 0.245 m.
+  EXPECT_LT(roof->accuracy.median, 0.1 * finest.ground_pixel);
+  EXPECT_GT(roof->completeness.within[1], 0.85);
+
+  // The level images kept from level 1 up: (1/4 + 1/16) / (1 + 1/4 + 1/16) of the pyramid
+  // from level 0 (the level sizes round up; measured 0.2384).
+  LevelImageStoreOptions all, from1;
+  all.levels = from1.levels = 3;
+  from1.first_level = 1;
+  const LevelImageStore store_all(rendered.block, all);
+  const LevelImageStore store_from1(rendered.block, from1);
+  EXPECT_NEAR(store_from1.MemoryMb() / store_all.MemoryMb(), 0.3125 / 1.3125, 0.002);
+  ImageStorage storage;
+  EXPECT_THROW(store_from1.Whole(0, &storage), std::logic_error);
+  EXPECT_EQ(store_from1.Whole(1, &storage).size(), rendered.block.images.size());
+
+  ReconstructionOptions bad = options;
+  bad.finest_level = 3;
+  EXPECT_THROW(bad.Check(), std::invalid_argument);
+}
 
 // Seed experiment 12: the gable ridge at 11.3 degrees to the grid, with the constant
 // patch, curvature regularisation, lambda 2000. Without crease straightening the ridge
