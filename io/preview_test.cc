@@ -67,6 +67,20 @@ PanelStats Panel(const ImagePlanes& image, int x0, int width, const PreviewOptio
   return stats;
 }
 
+// The picture as planes (channel-major), as Panel reads it.
+ImagePlanes Planes(const PreviewImage& picture) {
+  ImagePlanes planes;
+  planes.width = picture.width;
+  planes.height = picture.height;
+  planes.channels = 3;
+  const size_t n = static_cast<size_t>(picture.width) * picture.height;
+  planes.data.resize(3 * n);
+  for (size_t i = 0; i < n; ++i) {
+    for (int c = 0; c < 3; ++c) planes.data[c * n + i] = picture.rgb[3 * i + c];
+  }
+  return planes;
+}
+
 TEST(Preview, TwoPanelsOfTheWholeSurfaceWrittenAsPng) {
   const ExportSurface surface = GableRoof();
   const PreviewOptions options;
@@ -105,17 +119,7 @@ TEST(Preview, TwoPanelsOfTheWholeSurfaceWrittenAsPng) {
       const double y = (surface.vertices[t[0]] + surface.vertices[t[1]] + surface.vertices[t[2]]).y() / 3.0;
       if ((y > 0.0) == north) half.triangles.push_back(t);
     }
-    const PreviewImage picture = RenderPreview(half, options);
-    ImagePlanes planes;
-    planes.width = picture.width;
-    planes.height = picture.height;
-    planes.channels = 3;
-    const size_t n = static_cast<size_t>(picture.width) * picture.height;
-    planes.data.resize(3 * n);
-    for (size_t i = 0; i < n; ++i) {
-      for (int c = 0; c < 3; ++c) planes.data[c * n + i] = picture.rgb[3 * i + c];
-    }
-    return Panel(planes, 0, options.panel_width, options).mean_surface_grey;
+    return Panel(Planes(RenderPreview(half, options)), 0, options.panel_width, options).mean_surface_grey;
   };
   const double north = plane_grey(true), south = plane_grey(false);
   std::cout << "shaded roof planes: north-facing " << north << ", south-facing " << south << "\n";
@@ -146,19 +150,6 @@ ExportSurface Facade() {
     }
   }
   return s;
-}
-
-ImagePlanes Planes(const PreviewImage& picture) {
-  ImagePlanes planes;
-  planes.width = picture.width;
-  planes.height = picture.height;
-  planes.channels = 3;
-  const size_t n = static_cast<size_t>(picture.width) * picture.height;
-  planes.data.resize(3 * n);
-  for (size_t i = 0; i < n; ++i) {
-    for (int c = 0; c < 3; ++c) planes.data[c * n + i] = picture.rgb[3 * i + c];
-  }
-  return planes;
 }
 
 // Mean textured grey of the surface pixels in the upper and the lower half of the right panel.

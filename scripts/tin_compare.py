@@ -9,12 +9,7 @@
 import collections, math, os, sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from tin_plane_fit import read, border_rings, smallest_eigvec  # noqa: E402
-
-
-def sub(a, b): return [a[i] - b[i] for i in range(3)]
-def dot(a, b): return sum(a[i] * b[i] for i in range(3))
-def cross(a, b): return [a[1]*b[2]-a[2]*b[1], a[2]*b[0]-a[0]*b[2], a[0]*b[1]-a[1]*b[0]]
+from tin_plane_fit import read, border_rings, smallest_eigvec, sub, dot, cross, ray_triangle  # noqa: E402
 
 
 def main(argv):
@@ -56,15 +51,9 @@ def main(argv):
         u0, v0 = uv(o)
         best = None
         for k in grid.get((math.floor(u0 / cell), math.floor(v0 / cell)), []):
-            a, b, c = (PB[j] for j in fb[k])
-            ea, eb = sub(b, a), sub(c, a)
-            h = cross(nv, eb); det = dot(ea, h)
-            if abs(det) < 1e-15: continue
-            s = sub(o, a); bu = dot(s, h) / det
-            if bu < 0 or bu > 1: continue
-            q = cross(s, ea); bw = dot(nv, q) / det
-            if bw < 0 or bu + bw > 1: continue
-            t = dot(eb, q) / det
+            hit = ray_triangle(o, nv, *(PB[j] for j in fb[k]))
+            if hit is None: continue
+            t, bu, bw = hit
             if abs(t) <= dmax and (best is None or abs(t) < abs(best[0])):
                 sb = (1 - bu - bw) * vb[fb[k][0]].get('sigma', 0) + bu * vb[fb[k][1]].get('sigma', 0) + bw * vb[fb[k][2]].get('sigma', 0)
                 best = (t, sb)

@@ -13,6 +13,24 @@
 import collections, struct, sys, math
 
 
+# Small vector helpers and a ray-triangle test, shared with tin_compare.py and tin_tie_points.py.
+def sub(a, b): return [a[i] - b[i] for i in range(3)]
+def dot(a, b): return sum(a[i] * b[i] for i in range(3))
+def cross(a, b): return [a[1]*b[2]-a[2]*b[1], a[2]*b[0]-a[0]*b[2], a[0]*b[1]-a[1]*b[0]]
+
+
+def ray_triangle(o, d, a, b, c):
+    """Moeller-Trumbore: (t, u, w) of the line o + t d through triangle abc (t of either
+    sign; the hit is (1-u-w) a + u b + w c), or None when the line misses it."""
+    e1, e2 = sub(b, a), sub(c, a)
+    h = cross(d, e2); det = dot(e1, h)
+    if abs(det) < 1e-15: return None
+    s = sub(o, a); u = dot(s, h) / det
+    if u < 0 or u > 1: return None
+    q = cross(s, e1); w = dot(d, q) / det
+    if w < 0 or u + w > 1: return None
+    return dot(e2, q) / det, u, w
+
 def read(path):
     data = open(path, 'rb').read()
     end = data.index(b'end_header\n') + len(b'end_header\n')

@@ -10,12 +10,7 @@
 import math, os, sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from tin_plane_fit import read, smallest_eigvec  # noqa: E402
-
-
-def sub(a, b): return [a[i] - b[i] for i in range(3)]
-def dot(a, b): return sum(a[i] * b[i] for i in range(3))
-def cross(a, b): return [a[1]*b[2]-a[2]*b[1], a[2]*b[0]-a[0]*b[2], a[0]*b[1]-a[1]*b[0]]
+from tin_plane_fit import read, smallest_eigvec, sub, dot, cross, ray_triangle  # noqa: E402
 
 
 def read_colmap(folder):
@@ -93,15 +88,9 @@ def main(argv):
         o = pts[k][0]
         best = None
         for f in faces:
-            a, b, c = P[f[0]], P[f[1]], P[f[2]]
-            e1, e2 = sub(b, a), sub(c, a)
-            h = cross(nrm, e2); det = dot(e1, h)
-            if abs(det) < 1e-15: continue
-            s = sub(o, a); u = dot(s, h) / det
-            if u < 0 or u > 1: continue
-            q = cross(s, e1); w = dot(nrm, q) / det
-            if w < 0 or u + w > 1: continue
-            t = dot(e2, q) / det
+            hit = ray_triangle(o, nrm, P[f[0]], P[f[1]], P[f[2]])
+            if hit is None: continue
+            t = hit[0]
             if best is None or abs(t) < abs(best): best = t
         if best is not None:
             dist.append(best)

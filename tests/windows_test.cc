@@ -29,21 +29,35 @@ struct Compared {
   double rms_one = 0.0, rms_windows = 0.0;     // true height errors (m)
 };
 
-TEST(Windows, ManyWindowsMatchOneWindowWithinSigma) {
-  const Scene scene = LoadScene(std::string(FACETS_SOURCE_DIR) + "/tests/data/windows_gable.json");
-  const std::string dir = testing::TempDir() + "/facets_windows_seed_gable";
-  RenderOptions render_options;
-  render_options.noise_sigma = 4.0;
-  RenderScene(scene, dir, render_options);
-  const ImageBlock block = ReadColmapModel(dir + "/sparse", dir + "/images");
+// The windows test scene (seed gable pair, noise 4) rendered into `name`, its images
+// loaded, and a start surface 0.3 m below the truth with 2 m triangles (4x4 facets of
+// 0.5 m: about 2x2 pixels, seed 000). Built in place: the renderer keeps references.
+struct WindowsGable {
+  explicit WindowsGable(const std::string& name)
+      : scene(LoadScene(std::string(FACETS_SOURCE_DIR) + "/tests/data/windows_gable.json")),
+        truth(BuildTruthMesh(scene)),
+        renderer(scene, truth) {
+    const std::string dir = testing::TempDir() + "/" + name;
+    RenderOptions render_options;
+    render_options.noise_sigma = 4.0;
+    RenderScene(scene, dir, render_options);
+    block = ReadColmapModel(dir + "/sparse", dir + "/images");
+    LoadLevelImages(block, /*grey=*/true, &loaded);  // keeps pointers to block's cameras
+    start = StartBelowTruth(scene, renderer, 2.0, 0.3);
+  }
+  Scene scene;
+  TruthMesh truth;
+  Renderer renderer;
+  ImageBlock block;
   LoadedImages loaded;
-  LoadLevelImages(block, /*grey=*/true, &loaded);
+  TinMesh start;
+};
 
-  const TruthMesh truth = BuildTruthMesh(scene);
-  const Renderer renderer(scene, truth);
-  auto truth_z = [&](double x, double y) { return TruthHeight(renderer, x, y); };
-  // 4x4 facets of 0.5 m: about 2x2 pixels (seed 000).
-  const TinMesh start = StartBelowTruth(scene, renderer, 2.0, 0.3);
+TEST(Windows, ManyWindowsMatchOneWindowWithinSigma) {
+  const WindowsGable gable("facets_windows_seed_gable");
+  const LoadedImages& loaded = gable.loaded;
+  const TinMesh& start = gable.start;
+  auto truth_z = [&](double x, double y) { return TruthHeight(gable.renderer, x, y); };
 
   AdjustmentOptions adjustment;
   // The eaves bend by exactly the roof's 20 degrees: at the default crease angle of 20
@@ -118,17 +132,9 @@ TEST(Windows, ManyWindowsMatchOneWindowWithinSigma) {
 // thread and with two (windows of a group in parallel, pixel casting and the normal
 // equations' sums in parallel), and twice with two.
 TEST(Windows, SameSurfaceToTheBitWithOneAndTwoThreads) {
-  const Scene scene = LoadScene(std::string(FACETS_SOURCE_DIR) + "/tests/data/windows_gable.json");
-  const std::string dir = testing::TempDir() + "/facets_windows_threads";
-  RenderOptions render_options;
-  render_options.noise_sigma = 4.0;
-  RenderScene(scene, dir, render_options);
-  const ImageBlock block = ReadColmapModel(dir + "/sparse", dir + "/images");
-  LoadedImages loaded;
-  LoadLevelImages(block, /*grey=*/true, &loaded);
-  const TruthMesh truth = BuildTruthMesh(scene);
-  const Renderer renderer(scene, truth);
-  const TinMesh start = StartBelowTruth(scene, renderer, 2.0, 0.3);
+  const WindowsGable gable("facets_windows_threads");
+  const LoadedImages& loaded = gable.loaded;
+  const TinMesh& start = gable.start;
 
   AdjustmentOptions adjustment;
   adjustment.max_iterations = 4;
