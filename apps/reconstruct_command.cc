@@ -87,6 +87,13 @@ struct ReconstructArgs {
   int wall_passes = ReconstructionOptions().wall_passes;
   int tangential_smoothing = ReconstructionOptions().tangential_smoothing;
   int straighten_rounds = ReconstructionOptions().straighten_rounds;
+  bool normal_search = false;
+  int normal_search_last_level = 0;
+  bool normal_search_support = false;
+  int normal_search_rounds = 0;
+  double normal_search_min_cos = NormalSearchOptions().min_cos;
+  double normal_search_range = NormalSearchOptions().range_pixels;
+  double normal_search_min_score = NormalSearchOptions().min_score;
   std::string displacement = "normal";
   bool no_fold_guard = false;
   bool no_relax_unseen = false;
@@ -193,6 +200,13 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.wall_passes = args.wall_passes;
   options.tangential_smoothing = args.tangential_smoothing;
   options.straighten_rounds = args.straighten_rounds;
+  options.normal_search = args.normal_search;
+  options.normal_search_last_level = args.normal_search_last_level;
+  options.normal_search_options.support_filter = args.normal_search_support;
+  options.normal_search_rounds = args.normal_search_rounds;
+  options.normal_search_options.min_cos = args.normal_search_min_cos;
+  options.normal_search_options.range_pixels = args.normal_search_range;
+  options.normal_search_options.min_score = args.normal_search_min_score;
   options.adjustment.displacement = DisplacementFromName(args.displacement);
   options.adjustment.fold_guard = !args.no_fold_guard;
   options.relax_unseen = !args.no_relax_unseen;
@@ -386,6 +400,32 @@ void AddReconstructCommand(CLI::App& app) {
                   "drops, at most this often (0 = off)")
       ->capture_default_str()
       ->check(CLI::Range(0, 10));
+  sub->add_flag("--normal-search", args->normal_search,
+                "before each finer level: vertices search along their normals for the offset where the images "
+                "agree best (walls a coarser level left several pixels off)");
+  sub->add_option("--normal-search-last-level", args->normal_search_last_level,
+                  "normal search: finest pyramid level searched")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 20));
+  sub->add_flag("--normal-search-support", args->normal_search_support,
+                "normal search: keep a peak that a neighbour's peak supports (instead of the median)");
+  sub->add_option("--normal-search-rounds", args->normal_search_rounds,
+                  "normal search: after a level's adjustment search and adjust again, kept while sigma0 drops, "
+                  "at most this often")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 10));
+  sub->add_option("--normal-search-min-cos", args->normal_search_min_cos,
+                  "normal search: an image is used where it sees the vertex's tangent plane at |cos| >= this")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  sub->add_option("--normal-search-range", args->normal_search_range,
+                  "normal search: offsets over +- this many level pixels")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 64.0));
+  sub->add_option("--normal-search-min-score", args->normal_search_min_score,
+                  "normal search: least mean pairwise correlation of a peak")
+      ->capture_default_str()
+      ->check(CLI::Range(-1.0, 1.0));
   sub->add_option("--displacement", args->displacement,
                   "normal (3D: walls stand up) | vertical (2.5D, for comparison)")
       ->capture_default_str();

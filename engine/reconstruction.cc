@@ -214,6 +214,12 @@ std::string ReconstructionReport::Json() const {
     l["ground_pixel"] = level.ground_pixel;
     l["edge_length"] = level.edge_length;
     l["smoothed"] = level.smoothed;
+    l["normal_search_rounds"] = level.normal_search_rounds;
+    const NormalSearchReport& ns = level.normal_search;
+    if (ns.searched > 0) {
+      l["normal_search"] = {{"searched", ns.searched}, {"peaks", ns.peaks},     {"moved", ns.moved},
+                            {"limited", ns.limited},   {"median_move", ns.median_move}, {"max_move", ns.max_move}};
+    }
     l["break_off"] = level.break_off;
     l["vertices"] = level.vertices;
     l["faces"] = level.faces;
@@ -484,6 +490,15 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       }
     }
     LevelReport level_report;
+    if (options.normal_search && level != coarsest && level >= options.normal_search_last_level) {
+      level_report.normal_search =
+          SearchAlongNormals(&mesh, level_images(level), gsd0 * std::pow(2.0, level), options.normal_search_options);
+      const NormalSearchReport& ns = level_report.normal_search;
+      say("  level " + std::to_string(level) + " normal search: " + std::to_string(ns.searched) +
+          " vertices searched, " + std::to_string(ns.peaks) + " peaks, " + std::to_string(ns.moved) +
+          " moved (median " + std::to_string(ns.median_move) + " m, max " + std::to_string(ns.max_move) +
+          " m), " + std::to_string(ns.limited) + " limited by the fold guard");
+    }
     level_report.smoothed = smoothed;
     level_report.level = level;
     level_report.ground_pixel = gsd0 * std::pow(2.0, level);
@@ -535,6 +550,29 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
                                       level == finest, options.progress);
       level_report.wall_passes.push_back(
           {split.splits, split.flips, static_cast<int>(mesh.n_faces()), adjusted.summary.sigma0});
+    }
+    // Walls the adjustment left beyond its pull-in: search along the normals again and
+    // adjust again, kept only when the level then fits better.
+    for (int round = 0; options.normal_search && round < options.normal_search_rounds &&
+                        level >= options.normal_search_last_level;
+         ++round) {
+      TinMesh before = mesh;
+      const NormalSearchReport ns =
+          SearchAlongNormals(&mesh, level_images(level), gsd0 * std::pow(2.0, level), options.normal_search_options);
+      if (ns.moved == 0) break;
+      LevelAdjustment again = AdjustLevelInWindows(&mesh, window_images(level), level_options(level),
+                                                   options.windows, level == finest, options.progress);
+      const bool better = again.summary.sigma0 < adjusted.summary.sigma0;
+      say("  level " + std::to_string(level) + " normal search round " + std::to_string(round + 1) + ": " +
+          std::to_string(ns.moved) + " moved (median " + std::to_string(ns.median_move) + " m); sigma0 " +
+          std::to_string(again.summary.sigma0) + " against " + std::to_string(adjusted.summary.sigma0) +
+          (better ? ", kept" : ", dropped"));
+      if (!better) {
+        mesh = std::move(before);
+        break;
+      }
+      adjusted = std::move(again);
+      ++level_report.normal_search_rounds;
     }
     // A crease skew to the grid (a zigzag of edges): its vertex chains go onto the
     // crease's line and the level runs again, kept only when it fits better; up to

@@ -15,6 +15,7 @@
 
 #include "engine/adjustment_options.h"
 #include "engine/level_windows.h"
+#include "engine/normal_search.h"
 #include "engine/pyramid.h"
 #include "engine/start_closed.h"
 #include "engine/start_tiepoints.h"
@@ -111,6 +112,16 @@ struct ReconstructionOptions {
   // (StraightenCreaseChains, mesh/creases.h) and the level runs again, kept only when
   // its sigma0 is lower; at most this many rounds (0 = off). Off for closed starts.
   int straighten_rounds = 3;
+  // Before each level below the coarsest (after its subdivision): vertices search along
+  // their normals for the offset where the images agree best (engine/normal_search.h),
+  // so walls and eaves a coarser level left several pixels off start within the
+  // adjustment's pull-in.
+  bool normal_search = false;
+  int normal_search_last_level = 0;  // levels below this are not searched
+  // After a level's adjustment: search again and adjust again, kept while sigma0 drops,
+  // at most this often.
+  int normal_search_rounds = 0;
+  NormalSearchOptions normal_search_options;
   // Called with one line of progress at a time (stage, level, iteration, sigma0).
   std::function<void(const std::string&)> progress;
   // Called with each level's TIN once the level is finished (e.g. to keep it for a look
@@ -160,6 +171,8 @@ struct LevelReport {
   int folded_faces = 0;
   int self_intersections = 0;
   int fold_limited = 0;
+  NormalSearchReport normal_search;  // ReconstructionOptions::normal_search
+  int normal_search_rounds = 0;      // rounds kept (ReconstructionOptions::normal_search_rounds)
   int smoothed = 0;  // vertex moves of the tangential smoothing before the level
   int relaxed = 0;  // unseen vertices relaxed (ReconstructionOptions::relax_unseen), summed
   int hull_clamped = 0;     // vertices pulled inside the visual hull (ClosedStartOptions::hull_clamp)

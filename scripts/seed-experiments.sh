@@ -5,6 +5,7 @@
 # prints a Markdown table with the seed's figures beside ours. Needs a build in ./build.
 #   bash scripts/seed-experiments.sh [OUT_DIR]   (default out/seed-experiments)
 #   FACETS_SEED_START=tiepoints bash scripts/seed-experiments.sh ...  (start surface, default plane)
+#   FACETS_SEED_FLAGS="--normal-search" bash scripts/seed-experiments.sh ...  (more reconstruct options)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-out/seed-experiments}
@@ -37,7 +38,7 @@ for row in "${rows[@]}"; do
   for lambda in 2000 4000; do
     run="$out/$scene/$reg-$lambda"
     "$facets" reconstruct --colmap "$out/$scene/scene/sparse" --images "$out/$scene/scene/images" \
-      --out "$run" --levels 3 --regularisation "$reg" --lambda "$lambda" --roi -12 -12 0 12 12 9 --start "${FACETS_SEED_START:-plane}" \
+      --out "$run" --levels 3 --regularisation "$reg" --lambda "$lambda" --roi -12 -12 0 12 12 9 --start "${FACETS_SEED_START:-plane}" ${FACETS_SEED_FLAGS:-} \
       --no-glb --no-vrml --no-rasters > "$run.log" 2>&1
     "$facets" evaluate --truth "$out/$scene/scene" --mesh "$run/surface.ply" > "$run.eval" 2>&1
     sigma0=$(grep -o '"sigma0_finest": [0-9.]*' "$run/report.json" | awk '{printf "%.2f", $2}')

@@ -1,0 +1,208 @@
+#include "engine/normal_search.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "mesh/closed_surface.h"
+#include "mesh/surface_validity.h"
+#include "visibility/embree_scene.h"
+
+namespace facets {
+namespace {
+
+// Mean over channels, bilinear between pixel centres (pixel x covers [x, x + 1)).
+// False when the 2 x 2 neighbourhood is not all held.
+bool SampleGrey(const ImagePlanes& image, const Eigen::Vector2d& position, double* grey) {
+  const double u = position.x() - 0.5, v = position.y() - 0.5;
+  const double fu = std::floor(u), fv = std::floor(v);
+  const int x = static_cast<int>(fu), y = static_cast<int>(fv);
+  if (!image.Holds(x, y) || !image.Holds(x + 1, y + 1)) return false;
+  const double a = u - fu, b = v - fv;
+  double sum = 0.0;
+  for (int c = 0; c < image.channels; ++c) {
+    sum += (1 - a) * (1 - b) * image.at(c, x, y) + a * (1 - b) * image.at(c, x + 1, y) +
+           (1 - a) * b * image.at(c, x, y + 1) + a * b * image.at(c, x + 1, y + 1);
+  }
+  *grey = sum / image.channels;
+  return true;
+}
+
+struct Candidate {
+  double move = 0.0;
+  bool peak = false;
+};
+
+// The score of every offset for one vertex: mean pairwise NCC over its images, -inf
+// where some image cannot sample the whole patch or fewer than min_images have contrast.
+class VertexSearch {
+ public:
+  VertexSearch(const std::vector<const LevelImage*>& images, const NormalSearchOptions& options)
+      : images_(images), options_(options) {}
+
+  double Score(const std::vector<Eigen::Vector3d>& samples) {
+    const size_t n = samples.size();
+    sum_.assign(n, 0.0);
+    int used = 0;
+    std::vector<double> g(n);
+    for (const LevelImage* image : images_) {
+      bool ok = true;
+      for (size_t s = 0; s < n && ok; ++s) {
+        const Eigen::Vector3d in_cam = image->cam_from_world * samples[s];
+        ok = in_cam.z() > 0 && SampleGrey(*image->pixels, image->camera->ImageFromCam(in_cam), &g[s]);
+      }
+      if (!ok) return -std::numeric_limits<double>::infinity();
+      double mean = 0.0;
+      for (double x : g) mean += x;
+      mean /= n;
+      double ss = 0.0;
+      for (double& x : g) {
+        x -= mean;
+        ss += x * x;
+      }
+      if (std::sqrt(ss / n) < options_.min_contrast) continue;  // flat here: no information
+      const double scale = 1.0 / std::sqrt(ss);
+      for (size_t s = 0; s < n; ++s) sum_[s] += g[s] * scale;
+      ++used;
+    }
+    if (used < options_.min_images) return -std::numeric_limits<double>::infinity();
+    double norm2 = 0.0;
+    for (double x : sum_) norm2 += x * x;
+    // |sum z_i|^2 = K + sum_{i != j} z_i . z_j: the mean of the K (K - 1) pairwise NCCs.
+    return (norm2 - used) / (static_cast<double>(used) * (used - 1));
+  }
+
+ private:
+  const std::vector<const LevelImage*>& images_;
+  const NormalSearchOptions& options_;
+  std::vector<double> sum_;
+};
+
+Candidate SearchOneVertex(const Eigen::Vector3d& p, const Eigen::Vector3d& normal,
+                          const std::vector<const LevelImage*>& images, double ground_pixel,
+                          const NormalSearchOptions& options) {
+  Candidate result;
+  Eigen::Vector3d t1 = normal.unitOrthogonal();
+  Eigen::Vector3d t2 = normal.cross(t1);
+  const int h = options.patch_half;
+  std::vector<Eigen::Vector3d> patch;
+  for (int i = -h; i <= h; ++i) {
+    for (int j = -h; j <= h; ++j) {
+      patch.push_back(options.sample_pixels * ground_pixel * (i * t1 + j * t2));
+    }
+  }
+  const int steps = static_cast<int>(std::floor(options.range_pixels / options.step_pixels));
+  const double step = options.step_pixels * ground_pixel;
+  VertexSearch search(images, options);
+  std::vector<double> score(2 * steps + 1);
+  std::vector<Eigen::Vector3d> samples(patch.size());
+  for (int k = -steps; k <= steps; ++k) {
+    const Eigen::Vector3d centre = p + k * step * normal;
+    for (size_t s = 0; s < patch.size(); ++s) samples[s] = centre + patch[s];
+    score[k + steps] = search.Score(samples);
+  }
+  const double here = score[steps];
+  const int best = static_cast<int>(std::max_element(score.begin(), score.end()) - score.begin());
+  // A peak at the end of the range may lie beyond it: not taken.
+  if (best == 0 || best == 2 * steps || best == steps) return result;
+  if (!(score[best] >= options.min_score)) return result;
+  if (std::isfinite(here) && score[best] - here < options.min_gain) return result;
+  // Parabola through the peak and its neighbours for the sub-step offset.
+  const double a = score[best - 1], b = score[best], c = score[best + 1];
+  double frac = 0.0;
+  if (std::isfinite(a) && std::isfinite(c) && a - 2 * b + c < 0) frac = 0.5 * (a - c) / (a - 2 * b + c);
+  result.move = (best - steps + std::clamp(frac, -0.5, 0.5)) * step;
+  result.peak = true;
+  return result;
+}
+
+}  // namespace
+
+NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImage>& images,
+                                      double ground_pixel, const NormalSearchOptions& options) {
+  NormalSearchReport report;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<Eigen::Vector3i> triangles;
+  TinPointsAndTriangles(*mesh, &points, &triangles);
+  if (triangles.empty() || images.empty()) return report;
+  const TriangleScene scene(EmbreeDevice::Shared(), points, triangles);
+  const double range = options.range_pixels * ground_pixel;
+  // Rays blocked no closer than this to the vertex count as seeing it: the surface
+  // around a vertex that is off by up to the range may stand in its own way.
+  const double tolerance = range + options.patch_half * options.sample_pixels * ground_pixel;
+  const size_t n = points.size();
+  std::vector<Candidate> candidates(n);
+  std::vector<char> searched(n, 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 64), [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<const LevelImage*> seeing;
+    for (size_t v = r.begin(); v != r.end(); ++v) {
+      const auto vh = mesh->vertex_handle(static_cast<int>(v));
+      if (mesh->is_boundary(vh)) continue;
+      const Eigen::Vector3d& p = points[v];
+      const Eigen::Vector3d normal = ToEigen(mesh->normal(vh));
+      seeing.clear();
+      for (const LevelImage& image : images) {
+        const Eigen::Vector3d centre = image.cam_from_world.Inverse().translation;
+        const Eigen::Vector3d d = p - centre;
+        const double length = d.norm();
+        if (!(length > tolerance) || -normal.dot(d) < options.min_cos * length) continue;
+        const RayHit hit = scene.Intersect(centre, d, 0.0f, static_cast<float>(1.0 - tolerance / length));
+        if (!hit.hit) seeing.push_back(&image);
+      }
+      if (static_cast<int>(seeing.size()) < options.min_images) continue;
+      searched[v] = 1;
+      candidates[v] = SearchOneVertex(p, normal, seeing, ground_pixel, options);
+    }
+  });
+  // Median of the candidate moves over the vertex and its neighbours that face the same
+  // way (no peak counts as no move): a lone false peak is outvoted.
+  std::vector<double> moves(n, 0.0);
+  for (size_t v = 0; v < n; ++v) {
+    report.searched += searched[v];
+    report.peaks += candidates[v].peak;
+    if (!candidates[v].peak) continue;
+    const auto vh = mesh->vertex_handle(static_cast<int>(v));
+    const Eigen::Vector3d normal = ToEigen(mesh->normal(vh));
+    std::vector<double> around = {candidates[v].move};
+    int support = 0;
+    for (auto vv : mesh->vv_range(vh)) {
+      if (ToEigen(mesh->normal(vv)).dot(normal) < options.neighbour_cos) continue;
+      const Candidate& other = candidates[vv.idx()];
+      around.push_back(searched[vv.idx()] ? other.move : candidates[v].move);
+      support += other.peak && std::abs(other.move - candidates[v].move) <=
+                                   options.support_steps * options.step_pixels * ground_pixel;
+    }
+    if (options.support_filter) {
+      if (support > 0) moves[v] = candidates[v].move;
+      continue;
+    }
+    std::nth_element(around.begin(), around.begin() + around.size() / 2, around.end());
+    moves[v] = around[around.size() / 2];
+  }
+  const std::vector<Eigen::Vector3d> before = points;
+  const double least = 0.1 * options.step_pixels * ground_pixel;
+  for (size_t v = 0; v < n; ++v) {
+    if (std::abs(moves[v]) < least) continue;
+    const auto vh = mesh->vertex_handle(static_cast<int>(v));
+    mesh->set_point(vh, ToOpenMesh(points[v] + moves[v] * ToEigen(mesh->normal(vh))));
+  }
+  report.limited = LimitFoldingSteps(mesh, before);
+  std::vector<double> moved;
+  for (auto vh : mesh->vertices()) {
+    const double d = (ToEigen(mesh->point(vh)) - before[vh.idx()]).norm();
+    if (d >= least) moved.push_back(d);
+  }
+  report.moved = static_cast<int>(moved.size());
+  if (!moved.empty()) {
+    std::nth_element(moved.begin(), moved.begin() + moved.size() / 2, moved.end());
+    report.median_move = moved[moved.size() / 2];
+    report.max_move = *std::max_element(moved.begin(), moved.end());
+  }
+  UpdateVertexNormals(mesh);
+  return report;
+}
+
+}  // namespace facets

@@ -1,0 +1,53 @@
+// Search along the vertex normals between pyramid levels (issue 7): a coarse level that
+// put a wall or an eave 1-2.5 m off leaves it 4-10 pixels off on the next level, beyond
+// the pull-in of least-squares matching (docs/EXPERIMENTS.md, session 8). Before such a
+// level is adjusted, every vertex tries offsets along its normal over a range of level
+// pixels: a small patch in its tangent plane is projected into the images that see it
+// and scored by the mean pairwise normalised cross-correlation of their grey values
+// (object lifting of seed 001, done per vertex and along the normal). Vertices with a
+// clear, better peak move there; the moves are median-filtered over neighbours facing
+// the same way (a single false match does not survive), and steps that fold the surface
+// are halved or undone (mesh/surface_validity.h). The adjustment then starts within its
+// pull-in.
+#pragma once
+
+#include <vector>
+
+#include "engine/window_adjustment.h"
+#include "mesh/tin.h"
+
+namespace facets {
+
+struct NormalSearchOptions {
+  double range_pixels = 8.0;  // offsets over +- this many level ground pixels
+  double step_pixels = 0.5;   // offset step, level ground pixels
+  int patch_half = 4;         // patch of (2 * patch_half + 1)^2 samples
+  double sample_pixels = 1.0;  // sample spacing in the tangent plane, level ground pixels
+  double min_cos = 0.2;       // an image sees the vertex's plane at |cos| >= this
+  int min_images = 2;
+  double min_contrast = 2.0;  // grey-value standard deviation of a patch in an image
+  double min_score = 0.5;     // mean pairwise NCC of the best offset
+  double min_gain = 0.1;      // over the score where the vertex is
+  double neighbour_cos = 0.8;  // neighbours that vote face within ~37 deg
+  // Filter of the peaks: false = median over the vertex and its neighbours that face the
+  // same way (no peak counts as no move); true = a peak is kept when at least one such
+  // neighbour has a peak within support_steps offset steps of it.
+  bool support_filter = false;
+  double support_steps = 3.0;
+};
+
+struct NormalSearchReport {
+  int searched = 0;  // vertices with >= min_images images
+  int peaks = 0;     // of them with an accepted peak off zero
+  int moved = 0;     // moved after the median filter (|move| >= a tenth of a step)
+  int limited = 0;   // moves the fold guard halved or undid
+  double median_move = 0.0;  // |move| of the moved vertices (m)
+  double max_move = 0.0;
+};
+
+// `ground_pixel`: the level's ground pixel (m), which scales the range, step and patch.
+// Boundary vertices stay. Vertex normals are updated afterwards.
+NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImage>& images,
+                                      double ground_pixel, const NormalSearchOptions& options);
+
+}  // namespace facets
