@@ -87,13 +87,17 @@ struct ReconstructArgs {
   int wall_passes = ReconstructionOptions().wall_passes;
   int tangential_smoothing = ReconstructionOptions().tangential_smoothing;
   int straighten_rounds = ReconstructionOptions().straighten_rounds;
-  bool normal_search = false;
-  int normal_search_last_level = 0;
+  bool normal_search = ReconstructionOptions().normal_search;
+  int normal_search_last_level = ReconstructionOptions().normal_search_last_level;
   bool normal_search_support = false;
-  int normal_search_rounds = 0;
+  int normal_search_rounds = ReconstructionOptions().normal_search_rounds;
+  int normal_search_rounds_last_level = ReconstructionOptions().normal_search_rounds_last_level;
   double normal_search_min_cos = NormalSearchOptions().min_cos;
+  double normal_search_max_here = NormalSearchOptions().max_score_here;
+  double normal_search_min_angle = NormalSearchOptions().min_angle_to_views_deg;
   double normal_search_range = NormalSearchOptions().range_pixels;
   double normal_search_min_score = NormalSearchOptions().min_score;
+  int normal_search_patch = NormalSearchOptions().patch_half;
   std::string displacement = "normal";
   bool no_fold_guard = false;
   bool no_relax_unseen = false;
@@ -204,9 +208,13 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.normal_search_last_level = args.normal_search_last_level;
   options.normal_search_options.support_filter = args.normal_search_support;
   options.normal_search_rounds = args.normal_search_rounds;
+  options.normal_search_rounds_last_level = args.normal_search_rounds_last_level;
   options.normal_search_options.min_cos = args.normal_search_min_cos;
+  options.normal_search_options.max_score_here = args.normal_search_max_here;
+  options.normal_search_options.min_angle_to_views_deg = args.normal_search_min_angle;
   options.normal_search_options.range_pixels = args.normal_search_range;
   options.normal_search_options.min_score = args.normal_search_min_score;
+  options.normal_search_options.patch_half = args.normal_search_patch;
   options.adjustment.displacement = DisplacementFromName(args.displacement);
   options.adjustment.fold_guard = !args.no_fold_guard;
   options.relax_unseen = !args.no_relax_unseen;
@@ -400,9 +408,11 @@ void AddReconstructCommand(CLI::App& app) {
                   "drops, at most this often (0 = off)")
       ->capture_default_str()
       ->check(CLI::Range(0, 10));
-  sub->add_flag("--normal-search", args->normal_search,
-                "before each finer level: vertices search along their normals for the offset where the images "
-                "agree best (walls a coarser level left several pixels off)");
+  sub->add_flag("--normal-search,!--no-normal-search", args->normal_search,
+                "before each finer level: steep vertices (walls) search along their normals for the offset where the "
+                "images agree best, so walls a coarser level left several pixels off come back (on by default; not "
+                "for closed starts)")
+      ->capture_default_str();
   sub->add_option("--normal-search-last-level", args->normal_search_last_level,
                   "normal search: finest pyramid level searched")
       ->capture_default_str()
@@ -418,6 +428,23 @@ void AddReconstructCommand(CLI::App& app) {
                   "normal search: an image is used where it sees the vertex's tangent plane at |cos| >= this")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
+  sub->add_option("--normal-search-max-here", args->normal_search_max_here,
+                  "normal search: vertices whose images already correlate this well where they are stay")
+      ->capture_default_str()
+      ->check(CLI::Range(-1.0, 1.0));
+  sub->add_option("--normal-search-rounds-last-level", args->normal_search_rounds_last_level,
+                  "normal search: finest pyramid level with rounds")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 20));
+  sub->add_option("--normal-search-min-angle", args->normal_search_min_angle,
+                  "normal search: only vertices whose normal turns more than this (deg) from the mean direction to "
+                  "the images that see them (0 = all; 45: walls of an aerial block)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 90.0));
+  sub->add_option("--normal-search-patch", args->normal_search_patch,
+                  "normal search: patch of (2 N + 1)^2 samples one level pixel apart")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 16));
   sub->add_option("--normal-search-range", args->normal_search_range,
                   "normal search: offsets over +- this many level pixels")
       ->capture_default_str()

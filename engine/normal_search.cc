@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "mesh/closed_surface.h"
 #include "mesh/surface_validity.h"
@@ -81,12 +82,37 @@ class VertexSearch {
   std::vector<double> sum_;
 };
 
+// Two unit vectors spanning the tangent plane of a unit normal (the patch's axes).
+std::pair<Eigen::Vector3d, Eigen::Vector3d> TangentBasis(const Eigen::Vector3d& normal) {
+  const Eigen::Vector3d t1 = normal.unitOrthogonal();
+  return {t1, normal.cross(t1)};
+}
+
+// Whether the image holds every sample the search can ask of it: the patch's corners at
+// both ends of the range and where the vertex is. An image that sees a vertex near its
+// frame would otherwise spoil every offset's score.
+bool HoldsSearchBox(const LevelImage& image, const Eigen::Vector3d& p, const Eigen::Vector3d& normal,
+                    double range, double patch_radius) {
+  const auto [t1, t2] = TangentBasis(normal);
+  for (double offset : {-range, 0.0, range}) {
+    for (double a : {-1.0, 1.0}) {
+      for (double b : {-1.0, 1.0}) {
+        const Eigen::Vector3d in_cam = image.cam_from_world * (p + offset * normal + patch_radius * (a * t1 + b * t2));
+        if (!(in_cam.z() > 0)) return false;
+        const Eigen::Vector2d pixel = image.camera->ImageFromCam(in_cam);
+        const int x = static_cast<int>(std::floor(pixel.x() - 0.5)), y = static_cast<int>(std::floor(pixel.y() - 0.5));
+        if (!image.pixels->Holds(x, y) || !image.pixels->Holds(x + 1, y + 1)) return false;
+      }
+    }
+  }
+  return true;
+}
+
 Candidate SearchOneVertex(const Eigen::Vector3d& p, const Eigen::Vector3d& normal,
                           const std::vector<const LevelImage*>& images, double ground_pixel,
                           const NormalSearchOptions& options) {
   Candidate result;
-  Eigen::Vector3d t1 = normal.unitOrthogonal();
-  Eigen::Vector3d t2 = normal.cross(t1);
+  const auto [t1, t2] = TangentBasis(normal);
   const int h = options.patch_half;
   std::vector<Eigen::Vector3d> patch;
   for (int i = -h; i <= h; ++i) {
@@ -105,6 +131,7 @@ Candidate SearchOneVertex(const Eigen::Vector3d& p, const Eigen::Vector3d& norma
     score[k + steps] = search.Score(samples);
   }
   const double here = score[steps];
+  if (std::isfinite(here) && here >= options.max_score_here) return result;
   const int best = static_cast<int>(std::max_element(score.begin(), score.end()) - score.begin());
   // A peak at the end of the range may lie beyond it: not taken.
   if (best == 0 || best == 2 * steps || best == steps) return result;
@@ -132,27 +159,42 @@ NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImag
   const double range = options.range_pixels * ground_pixel;
   // Rays blocked no closer than this to the vertex count as seeing it: the surface
   // around a vertex that is off by up to the range may stand in its own way.
-  const double tolerance = range + options.patch_half * options.sample_pixels * ground_pixel;
+  const double patch_radius = options.patch_half * options.sample_pixels * ground_pixel;
+  const double tolerance = range + patch_radius;
+  std::vector<Eigen::Vector3d> centres;
+  for (const LevelImage& image : images) centres.push_back(image.cam_from_world.Inverse().translation);
+  const double max_cos_to_views = std::cos(options.min_angle_to_views_deg * M_PI / 180.0);
   const size_t n = points.size();
   std::vector<Candidate> candidates(n);
   std::vector<char> searched(n, 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 64), [&](const tbb::blocked_range<size_t>& r) {
     std::vector<const LevelImage*> seeing;
+    std::vector<size_t> seeing_index;
     for (size_t v = r.begin(); v != r.end(); ++v) {
       const auto vh = mesh->vertex_handle(static_cast<int>(v));
       if (mesh->is_boundary(vh)) continue;
       const Eigen::Vector3d& p = points[v];
       const Eigen::Vector3d normal = ToEigen(mesh->normal(vh));
       seeing.clear();
-      for (const LevelImage& image : images) {
-        const Eigen::Vector3d centre = image.cam_from_world.Inverse().translation;
+      seeing_index.clear();
+      for (size_t k = 0; k < images.size(); ++k) {
+        const LevelImage& image = images[k];
+        const Eigen::Vector3d& centre = centres[k];
         const Eigen::Vector3d d = p - centre;
         const double length = d.norm();
         if (!(length > tolerance) || -normal.dot(d) < options.min_cos * length) continue;
+        if (!HoldsSearchBox(image, p, normal, range, patch_radius)) continue;
         const RayHit hit = scene.Intersect(centre, d, 0.0f, static_cast<float>(1.0 - tolerance / length));
-        if (!hit.hit) seeing.push_back(&image);
+        if (hit.hit) continue;
+        seeing.push_back(&image);
+        seeing_index.push_back(k);
       }
       if (static_cast<int>(seeing.size()) < options.min_images) continue;
+      if (options.min_angle_to_views_deg > 0.0) {
+        Eigen::Vector3d towards = Eigen::Vector3d::Zero();
+        for (size_t k : seeing_index) towards += (centres[k] - p).normalized();
+        if (towards.normalized().dot(normal) > max_cos_to_views) continue;
+      }
       searched[v] = 1;
       candidates[v] = SearchOneVertex(p, normal, seeing, ground_pixel, options);
     }

@@ -28,6 +28,13 @@ struct NormalSearchOptions {
   double min_contrast = 2.0;  // grey-value standard deviation of a patch in an image
   double min_score = 0.5;     // mean pairwise NCC of the best offset
   double min_gain = 0.1;      // over the score where the vertex is
+  // Vertices whose images already agree where they are (score >= this) stay: a search
+  // there can only find a look-alike.
+  double max_score_here = 1.0;
+  // Only vertices whose normal turns more than this from the mean direction to the images
+  // that see them (walls of an aerial block, not its roofs and ground; 0 = every vertex:
+  // on the seed table 3 of 28 runs then miss, docs/EXPERIMENTS.md).
+  double min_angle_to_views_deg = 45.0;
   double neighbour_cos = 0.8;  // neighbours that vote face within ~37 deg
   // Filter of the peaks: false = median over the vertex and its neighbours that face the
   // same way (no peak counts as no move); true = a peak is kept when at least one such

@@ -490,7 +490,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       }
     }
     LevelReport level_report;
-    if (options.normal_search && level != coarsest && level >= options.normal_search_last_level) {
+    if (options.normal_search && !closed && level != coarsest && level >= options.normal_search_last_level) {
       level_report.normal_search =
           SearchAlongNormals(&mesh, level_images(level), gsd0 * std::pow(2.0, level), options.normal_search_options);
       const NormalSearchReport& ns = level_report.normal_search;
@@ -553,8 +553,8 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     }
     // Walls the adjustment left beyond its pull-in: search along the normals again and
     // adjust again, kept only when the level then fits better.
-    for (int round = 0; options.normal_search && round < options.normal_search_rounds &&
-                        level >= options.normal_search_last_level;
+    for (int round = 0; options.normal_search && !closed && level != coarsest && round < options.normal_search_rounds &&
+                        level >= options.normal_search_last_level && level >= options.normal_search_rounds_last_level;
          ++round) {
       TinMesh before = mesh;
       const NormalSearchReport ns =

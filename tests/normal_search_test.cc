@@ -65,6 +65,13 @@ class NormalSearchGable : public testing::Test {
   static TruthMesh* truth_;
   static Renderer* renderer_;
 };
+
+// Every vertex searched (the default searches steep vertices only; the gable's roof is not).
+NormalSearchOptions EveryVertex() {
+  NormalSearchOptions options;
+  options.min_angle_to_views_deg = 0.0;
+  return options;
+}
 Scene* NormalSearchGable::scene_ = nullptr;
 ImageBlock* NormalSearchGable::block_ = nullptr;
 LoadedImages* NormalSearchGable::loaded_ = nullptr;
@@ -75,7 +82,7 @@ TEST_F(NormalSearchGable, FourPixelsBelowComesBackWithinHalfAPixel) {
   const double gsd = scene_->ground_pixel_size;
   TinMesh mesh = Start(4.0 * gsd);
   const double before = Median(HeightErrors(mesh));
-  const NormalSearchReport report = SearchAlongNormals(&mesh, loaded_->images, gsd, NormalSearchOptions());
+  const NormalSearchReport report = SearchAlongNormals(&mesh, loaded_->images, gsd, EveryVertex());
   const std::vector<double> errors = HeightErrors(mesh);
   const double after = Median(errors);
   const double within = std::count_if(errors.begin(), errors.end(), [&](double e) { return e < 0.5 * gsd; }) /
@@ -92,7 +99,7 @@ TEST_F(NormalSearchGable, FourPixelsBelowComesBackWithinHalfAPixel) {
 TEST_F(NormalSearchGable, OnTheTruthNothingMovesFar) {
   const double gsd = scene_->ground_pixel_size;
   TinMesh mesh = Start(0.0);
-  const NormalSearchReport report = SearchAlongNormals(&mesh, loaded_->images, gsd, NormalSearchOptions());
+  const NormalSearchReport report = SearchAlongNormals(&mesh, loaded_->images, gsd, EveryVertex());
   const std::vector<double> errors = HeightErrors(mesh);
   const double far = std::count_if(errors.begin(), errors.end(), [&](double e) { return e > gsd; }) /
                      static_cast<double>(errors.size());
@@ -102,6 +109,17 @@ TEST_F(NormalSearchGable, OnTheTruthNothingMovesFar) {
   EXPECT_LT(far, 0.02);
 }
 
+// By default only vertices whose normal turns more than 45 degrees from their images
+// are searched: a 20-degree roof seen from above is left to the adjustment.
+TEST_F(NormalSearchGable, RoofsAreNotSearchedByDefault) {
+  const double gsd = scene_->ground_pixel_size;
+  TinMesh mesh = Start(4.0 * gsd);
+  const NormalSearchReport report = SearchAlongNormals(&mesh, loaded_->images, gsd, NormalSearchOptions());
+  EXPECT_EQ(report.searched, 0);
+  EXPECT_EQ(report.moved, 0);
+  EXPECT_NEAR(Median(HeightErrors(mesh)), 4.0 * gsd, 1e-6);
+}
+
 // Through the pipeline (`facets reconstruct --normal-search`): every level below the
 // coarsest is searched and reported, and the roof still comes out right.
 TEST_F(NormalSearchGable, ReconstructSearchesEveryFinerLevel) {
@@ -109,6 +127,7 @@ TEST_F(NormalSearchGable, ReconstructSearchesEveryFinerLevel) {
   options.levels = 3;
   options.start = StartSurfaceKind::kPlane;  // at the tie points' median height, as the seed table
   options.normal_search = true;
+  options.normal_search_options = EveryVertex();
   ImageBlock block = *block_;
   block.roi = scene_->roi;
   const Reconstruction r = Reconstruct(block, options);
