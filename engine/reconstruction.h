@@ -119,7 +119,7 @@ struct ReconstructionOptions {
   // normal_search_options.min_angle_to_views_deg (45) from the direction to their images:
   // the walls of an aerial block, not its roofs and ground (the seed table is unchanged to
   // the digit). Not for closed starts (every rim is steep against its views; the visual hull
-  // and the silhouette term hold them). Whole block: walls >= 2 views 32.4 -> 48.5 %
+  // and the silhouette term hold them). Whole block: walls >= 2 views 32.4 -> 55.2 %
   // complete at 1 GSD (docs/EXPERIMENTS.md, session 9).
   bool normal_search = true;
   int normal_search_last_level = 0;  // levels below this are not searched
