@@ -87,7 +87,7 @@ struct ReconstructArgs {
   int wall_passes = ReconstructionOptions().wall_passes;
   int tangential_smoothing = ReconstructionOptions().tangential_smoothing;
   int straighten_rounds = ReconstructionOptions().straighten_rounds;
-  bool normal_search = ReconstructionOptions().normal_search;
+  bool normal_search_on = false, normal_search_off = false;
   int normal_search_last_level = ReconstructionOptions().normal_search_last_level;
   bool normal_search_support = false;
   int normal_search_rounds = ReconstructionOptions().normal_search_rounds;
@@ -204,7 +204,8 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.wall_passes = args.wall_passes;
   options.tangential_smoothing = args.tangential_smoothing;
   options.straighten_rounds = args.straighten_rounds;
-  options.normal_search = args.normal_search;
+  if (args.normal_search_on) options.normal_search = true;
+  if (args.normal_search_off) options.normal_search = false;
   options.normal_search_last_level = args.normal_search_last_level;
   options.normal_search_options.support_filter = args.normal_search_support;
   options.normal_search_rounds = args.normal_search_rounds;
@@ -408,11 +409,12 @@ void AddReconstructCommand(CLI::App& app) {
                   "drops, at most this often (0 = off)")
       ->capture_default_str()
       ->check(CLI::Range(0, 10));
-  sub->add_flag("--normal-search,!--no-normal-search", args->normal_search,
+  sub->add_flag("--normal-search", args->normal_search_on,
                 "before each finer level: steep vertices (walls) search along their normals for the offset where the "
-                "images agree best, so walls a coarser level left several pixels off come back (on by default; not "
-                "for closed starts)")
-      ->capture_default_str();
+                "images agree best, so walls a coarser level left several pixels off come back (default: on for "
+                "plane and tie-point starts, off for closed and facade starts)");
+  sub->add_flag("--no-normal-search", args->normal_search_off, "no normal search")
+      ->excludes("--normal-search");
   sub->add_option("--normal-search-last-level", args->normal_search_last_level,
                   "normal search: finest pyramid level searched")
       ->capture_default_str()

@@ -461,6 +461,8 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     mesh = StartSurface(block, roi, start_height, edge_length(coarsest), options, &result.report);
   }
   say("stage start: " + result.report.start_surface + (result.report.start_detail.empty() ? "" : ": " + result.report.start_detail));
+  const bool normal_search = options.normal_search.value_or(!closed && !fitted);
+  if (normal_search) say("normal search: steep vertices before each finer level");
   for (int level = coarsest; level >= finest; --level) {
     int smoothed = 0;
     const auto level_start = std::chrono::steady_clock::now();
@@ -490,7 +492,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       }
     }
     LevelReport level_report;
-    if (options.normal_search && !closed && level != coarsest && level >= options.normal_search_last_level) {
+    if (normal_search && level != coarsest && level >= options.normal_search_last_level) {
       level_report.normal_search =
           SearchAlongNormals(&mesh, level_images(level), gsd0 * std::pow(2.0, level), options.normal_search_options);
       const NormalSearchReport& ns = level_report.normal_search;
@@ -553,7 +555,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     }
     // Walls the adjustment left beyond its pull-in: search along the normals again and
     // adjust again, kept only when the level then fits better.
-    for (int round = 0; options.normal_search && !closed && level != coarsest && round < options.normal_search_rounds &&
+    for (int round = 0; normal_search && level != coarsest && round < options.normal_search_rounds &&
                         level >= options.normal_search_last_level && level >= options.normal_search_rounds_last_level;
          ++round) {
       TinMesh before = mesh;

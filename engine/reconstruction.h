@@ -118,10 +118,13 @@ struct ReconstructionOptions {
   // adjustment's pull-in. Only vertices whose normal turns more than
   // normal_search_options.min_angle_to_views_deg (45) from the direction to their images:
   // the walls of an aerial block, not its roofs and ground (the seed table is unchanged to
-  // the digit). Not for closed starts (every rim is steep against its views; the visual hull
-  // and the silhouette term hold them). Whole block: walls >= 2 views 32.4 -> 55.2 %
-  // complete at 1 GSD (docs/EXPERIMENTS.md, session 9).
-  bool normal_search = true;
+  // the digit). Whole block: walls >= 2 views 32.4 -> 55.2 % complete at 1 GSD
+  // (docs/EXPERIMENTS.md, session 9). Unset (auto): on for plane and tie-point starts, off
+  // for closed starts (every rim is steep against its views; the visual hull and the
+  // silhouette term hold them) and for a start plane fitted to a facade (the street and the
+  // side walls are the steep parts there; on the fountain the search made the flat wall
+  // rougher: plane rms 8.3 -> 20.2 mm).
+  std::optional<bool> normal_search;
   int normal_search_last_level = 0;  // levels below this are not searched
   // After a level's adjustment: search again and adjust again, kept while sigma0 drops,
   // at most this often, on levels normal_search_rounds_last_level and coarser but not the
