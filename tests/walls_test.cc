@@ -11,6 +11,7 @@
 #include "engine/reconstruction.h"
 #include "mesh/closed_surface.h"
 #include "mesh/surface_validity.h"
+#include "scenes/evaluate.h"
 #include "tests/rendered_scene.h"
 
 namespace facets {
@@ -85,6 +86,43 @@ TEST(Walls, BlockBuildingIsValidAndFlagsTheWallOneImageSees) {
   EXPECT_GT(south_flagged, south / 2);
   EXPECT_LT(seen_flagged, seen / 4);
   EXPECT_GT(Median(sigma_flagged), Median(sigma_three));
+}
+
+// The search along the normals between levels (issue 7, engine/normal_search.h) on the
+// block's tall building (20 x 12 x 12 m, 4 levels, the whole pipeline): walls that two or
+// more images see come out far more complete at 1 ground pixel than without it (68.5 %
+// against 36.3 % when written; the runs do not depend on the thread count), and the
+// surface stays free of crossings.
+TEST(Walls, NormalSearchStandsTheTallBuildingsWallsUp) {
+  const RenderedScene scene = RenderAndRead("scenes/data/block.json", testing::TempDir() + "/facets_walls_tall");
+  RegionOfInterest roi;
+  roi.min = Eigen::Vector3d(-30, -30, -3);
+  roi.max = Eigen::Vector3d(-2, -6, 20);
+  const TruthScene truth = ReadTruthScene(scene.dir);
+  auto walls_within_one_pixel = [&](bool search, int* crossing) {
+    ReconstructionOptions options;
+    options.levels = 4;
+    options.roi = roi;
+    options.normal_search = search;
+    const Reconstruction r = Reconstruct(scene.block, options);
+    *crossing = r.report.levels.back().self_intersections;
+    MeshData surface;
+    surface.vertices = r.tessellation.points;
+    surface.faces = r.tessellation.triangles;
+    EvaluationOptions evaluation;
+    evaluation.roi = roi;
+    const RegionScore* wall = Evaluate(truth, surface, evaluation).Region("wall");
+    if (wall == nullptr || wall->multi_view.within.size() < 2) return -1.0;
+    return wall->multi_view.within[1];
+  };
+  int crossing_with = -1, crossing_without = -1;
+  const double with = walls_within_one_pixel(true, &crossing_with);
+  const double without = walls_within_one_pixel(false, &crossing_without);
+  std::cout << "walls >= 2 views within 1 GSD: " << with << " with the normal search, " << without
+            << " without; crossing pairs " << crossing_with << " / " << crossing_without << "\n";
+  EXPECT_GT(with, 0.6);
+  EXPECT_GT(with, without + 0.2);
+  EXPECT_EQ(crossing_with, 0);
 }
 
 }  // namespace
