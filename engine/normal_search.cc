@@ -47,8 +47,9 @@ class VertexSearch {
   double Score(const std::vector<Eigen::Vector3d>& samples) {
     const size_t n = samples.size();
     sum_.assign(n, 0.0);
+    g_.resize(n);
+    std::vector<double>& g = g_;
     int used = 0;
-    std::vector<double> g(n);
     for (const LevelImage* image : images_) {
       bool ok = true;
       for (size_t s = 0; s < n && ok; ++s) {
@@ -80,6 +81,7 @@ class VertexSearch {
   const std::vector<const LevelImage*>& images_;
   const NormalSearchOptions& options_;
   std::vector<double> sum_;
+  std::vector<double> g_;  // one image's grey values at the samples (reused per offset)
 };
 
 // Two unit vectors spanning the tangent plane of a unit normal (the patch's axes).

@@ -492,9 +492,17 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       }
     }
     LevelReport level_report;
-    if (normal_search && level != coarsest && level >= options.normal_search_last_level) {
-      level_report.normal_search =
-          SearchAlongNormals(&mesh, level_images(level), gsd0 * std::pow(2.0, level), options.normal_search_options);
+    // The normal search (before the level and in its rounds) reads the level's whole images
+    // once; with tiled images they are freed with the level, not kept with the lifting's.
+    const bool search_level = normal_search && level != coarsest && level >= options.normal_search_last_level;
+    ImageStorage search_storage;
+    std::vector<LevelImage> search_images;
+    auto search_normals = [&]() {
+      if (search_images.empty()) search_images = store.Whole(level, &search_storage);
+      return SearchAlongNormals(&mesh, search_images, gsd0 * std::pow(2.0, level), options.normal_search_options);
+    };
+    if (search_level) {
+      level_report.normal_search = search_normals();
       const NormalSearchReport& ns = level_report.normal_search;
       say("  level " + std::to_string(level) + " normal search: " + std::to_string(ns.searched) +
           " vertices searched, " + std::to_string(ns.peaks) + " peaks, " + std::to_string(ns.moved) +
@@ -555,12 +563,11 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     }
     // Walls the adjustment left beyond its pull-in: search along the normals again and
     // adjust again, kept only when the level then fits better.
-    for (int round = 0; normal_search && level != coarsest && round < options.normal_search_rounds &&
-                        level >= options.normal_search_last_level && level >= options.normal_search_rounds_last_level;
+    for (int round = 0;
+         search_level && round < options.normal_search_rounds && level >= options.normal_search_rounds_last_level;
          ++round) {
       TinMesh before = mesh;
-      const NormalSearchReport ns =
-          SearchAlongNormals(&mesh, level_images(level), gsd0 * std::pow(2.0, level), options.normal_search_options);
+      const NormalSearchReport ns = search_normals();
       if (ns.moved == 0) break;
       LevelAdjustment again = AdjustLevelInWindows(&mesh, window_images(level), level_options(level),
                                                    options.windows, level == finest, options.progress);
