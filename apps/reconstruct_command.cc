@@ -91,6 +91,7 @@ struct ReconstructArgs {
   int normal_search_last_level = ReconstructionOptions().normal_search_last_level;
   bool normal_search_support = false;
   int normal_search_rounds = ReconstructionOptions().normal_search_rounds;
+  std::optional<double> polish;
   int normal_search_rounds_last_level = ReconstructionOptions().normal_search_rounds_last_level;
   double normal_search_min_cos = NormalSearchOptions().min_cos;
   double normal_search_max_here = NormalSearchOptions().max_score_here;
@@ -209,6 +210,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.normal_search_last_level = args.normal_search_last_level;
   options.normal_search_options.support_filter = args.normal_search_support;
   options.normal_search_rounds = args.normal_search_rounds;
+  if (args.polish) options.polish_robust_k = *args.polish;
   options.normal_search_rounds_last_level = args.normal_search_rounds_last_level;
   options.normal_search_options.min_cos = args.normal_search_min_cos;
   options.normal_search_options.max_score_here = args.normal_search_max_here;
@@ -421,6 +423,11 @@ void AddReconstructCommand(CLI::App& app) {
       ->check(CLI::Range(0, 20));
   sub->add_flag("--normal-search-support", args->normal_search_support,
                 "normal search: keep a peak that a neighbour's peak supports (instead of the median)");
+  sub->add_option("--polish", args->polish,
+                  "after the finest level: adjust it once more from its finished surface, with Huber weights beyond K "
+                  "robust sigmas and rejection beyond 5 (0 = plain least squares; off by default: it costs as much "
+                  "as the finest level again)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_option("--normal-search-rounds", args->normal_search_rounds,
                   "normal search: after a level's adjustment search and adjust again, kept while sigma0 drops, "
                   "at most this often")

@@ -166,6 +166,9 @@ void ReconstructionOptions::Check() const {
   if (levels < 1 || levels > 10) fail("levels must lie in 1..10");
   if (finest_level < 0 || finest_level >= levels) fail("finest_level must lie in 0..levels-1");
   if (!(facet_pixels > 0.5)) fail("facet_pixels must be > 0.5");
+  if (std::isnan(polish_robust_k)) fail("polish_robust_k must be a number (negative = no polish)");
+  if (polish_robust_k > 0.0 && !(polish_reject_k > polish_robust_k))
+    fail("polish_reject_k must exceed polish_robust_k");
   if (lifting_steps < 0) fail("lifting_steps must be >= 0");
   if (!(break_off_gsd >= 0.0)) fail("break_off_gsd must be >= 0");
   if (wall_passes < 0 || wall_passes > 10) fail("wall_passes must lie in 0..10");
@@ -236,6 +239,7 @@ std::string ReconstructionReport::Json() const {
     l["straighten_passes_kept"] = level.straighten_kept;
     l["straighten_passes_dropped"] = level.straighten_dropped;
     l["straightened_vertices"] = level.straightened;
+    if (level.polished) l["sigma0_before_polish"] = level.sigma0_before_polish;
     for (const WallPass& pass : level.wall_passes) {
       l["wall_passes"].push_back({{"splits", pass.splits}, {"flips", pass.flips},
                                   {"faces", pass.faces}, {"sigma0", pass.sigma0}});
@@ -532,6 +536,13 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       UpdateVertexNormals(&mesh);
       return relaxed;
     };
+    // After the finest level's adjustment, moves of the vertices with the topology kept
+    // (relaxation, hull clamp, untangling, polish) move only the products' surface points.
+    auto update_products_surface = [&]() {
+      const std::vector<bool> creases =
+          DetectCreaseEdges(mesh, adjustment_options.crease_angle_deg, adjustment_options.rounded_ridges);
+      UpdateTessellationPoints(BuildPatches(mesh, ComputeCornerNormals(mesh, creases)), &adjusted.tessellation);
+    };
     // Walls that stood up during this adjustment stretched their triangles: split them
     // now and adjust again, so a wall carries vertices at the density of roof and
     // ground within the level, not only one level later (issue 7).
@@ -615,11 +626,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     // closed starts: their rims, seen edge-on, count as unseen (about 200 vertices on the
     // synthetic object), and relaxing them cost its completeness (0.95 -> 0.947).
     const bool relax_now = level > finest || !closed;
-    if (relax_now && relax_unseen() > 0 && level == finest) {
-      const std::vector<bool> creases =
-          DetectCreaseEdges(mesh, adjustment_options.crease_angle_deg, adjustment_options.rounded_ridges);
-      UpdateTessellationPoints(BuildPatches(mesh, ComputeCornerNormals(mesh, creases)), &adjusted.tessellation);
-    }
+    if (relax_now && relax_unseen() > 0 && level == finest) update_products_surface();
     // Silhouette constraint of a visual-hull start: the surface may not leave the hull.
     if (closed && closed->visual_hull && (options.closed.hull_clamp || options.closed.hull_rims)) {
       const std::vector<bool> creases = DetectCreaseEdges(mesh, adjustment_options.crease_angle_deg,
@@ -634,7 +641,8 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
             *closed, options.closed.hull_rim_edges * edge_length(level), options.closed.hull_rim_cos, &mesh);
       }
       if (level == finest && level_report.hull_clamped + level_report.hull_rim_pushed > 0) {
-        // Same topology and creases: only the products' surface points move.
+        // Same topology and the creases of the surface before the clamp: only the
+        // products' surface points move.
         UpdateTessellationPoints(BuildPatches(mesh, ComputeCornerNormals(mesh, creases)),
                                  &adjusted.tessellation);
       }
@@ -652,18 +660,43 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
         UpdateVertexNormals(&mesh);
         level_report.crossing_untangled = untangled.pairs_before;
         level_report.untangle_moved = untangled.vertices_moved;
-        if (level == finest) {
-          // Same topology: only the products' surface points move.
-          const std::vector<bool> creases = DetectCreaseEdges(mesh, adjustment_options.crease_angle_deg,
-                                                          adjustment_options.rounded_ridges);
-          UpdateTessellationPoints(BuildPatches(mesh, ComputeCornerNormals(mesh, creases)),
-                                   &adjusted.tessellation);
-        }
+        if (level == finest) update_products_surface();
         say("  level " + std::to_string(level) + ": " + std::to_string(untangled.pairs_before) +
             " crossing triangle pairs untangled in " + std::to_string(untangled.rounds) + " rounds (" +
             std::to_string(untangled.vertices_moved) + " vertices moved, " +
             std::to_string(untangled.pairs_after) + " pairs left)");
       }
+    }
+    // The polish (ReconstructionOptions::polish_robust_k): the finest level once more from
+    // its finished surface, with robust weights, then relaxed and untangled as above.
+    if (level == finest && options.polish_robust_k >= 0.0) {
+      AdjustmentOptions polish = level_options(level);
+      polish.robust_k = options.polish_robust_k;
+      polish.reject_k = options.polish_robust_k > 0.0 ? options.polish_reject_k : 0.0;
+      level_report.polished = true;
+      level_report.sigma0_before_polish = adjusted.summary.sigma0;
+      std::ostringstream how;
+      how << "stage polish: level " << level << " once more, ";
+      if (polish.robust_k > 0.0) {
+        how << "Huber weights beyond " << polish.robust_k << " robust sigmas, rejection beyond " << polish.reject_k;
+      } else {
+        how << "plain least squares";
+      }
+      say(how.str());
+      adjusted = AdjustLevelInWindows(&mesh, window_images(level), polish, options.windows, true, options.progress);
+      say("  level " + std::to_string(level) + " polish: sigma0 " + std::to_string(adjusted.summary.sigma0) +
+          " (before " + std::to_string(level_report.sigma0_before_polish) + "), " +
+          std::to_string(adjusted.summary.rejected) + " observations rejected, " +
+          std::to_string(adjusted.summary.downweighted) + " down-weighted");
+      if (relax_now) relax_unseen();
+      if (options.untangle) {
+        const UntangleReport untangled = UntangleSelfIntersections(&mesh);
+        crossing_left = untangled.pairs_after;
+        level_report.crossing_untangled += untangled.pairs_before;
+        level_report.untangle_moved += untangled.vertices_moved;
+      }
+      UpdateVertexNormals(&mesh);
+      update_products_surface();
     }
     level_report.vertices = static_cast<int>(mesh.n_vertices());
     level_report.faces = static_cast<int>(mesh.n_faces());
