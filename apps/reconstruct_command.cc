@@ -80,6 +80,7 @@ struct ReconstructArgs {
   // None: 2 and 5 for closed starts (pixels past a silhouette see the background),
   // off otherwise.
   std::optional<double> robust, reject;
+  std::optional<double> polish;  // ReconstructionOptions::polish_robust_k
   bool colour = false;
   int window_faces = WindowPartitionOptions().max_faces;
   int window_margin = WindowPartitionOptions().margin_rings;
@@ -91,7 +92,6 @@ struct ReconstructArgs {
   int normal_search_last_level = ReconstructionOptions().normal_search_last_level;
   bool normal_search_support = false;
   int normal_search_rounds = ReconstructionOptions().normal_search_rounds;
-  std::optional<double> polish;
   int normal_search_rounds_last_level = ReconstructionOptions().normal_search_rounds_last_level;
   double normal_search_min_cos = NormalSearchOptions().min_cos;
   double normal_search_max_here = NormalSearchOptions().max_score_here;

@@ -653,20 +653,21 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     }
     // The untangling counts the crossing pairs it leaves: no second CGAL pass for the report.
     int crossing_left = -1;
-    if (options.untangle) {
+    auto untangle = [&]() {
+      if (!options.untangle) return;
       const UntangleReport untangled = UntangleSelfIntersections(&mesh);
       crossing_left = untangled.pairs_after;
-      if (untangled.rounds > 0) {
-        UpdateVertexNormals(&mesh);
-        level_report.crossing_untangled = untangled.pairs_before;
-        level_report.untangle_moved = untangled.vertices_moved;
-        if (level == finest) update_products_surface();
-        say("  level " + std::to_string(level) + ": " + std::to_string(untangled.pairs_before) +
-            " crossing triangle pairs untangled in " + std::to_string(untangled.rounds) + " rounds (" +
-            std::to_string(untangled.vertices_moved) + " vertices moved, " +
-            std::to_string(untangled.pairs_after) + " pairs left)");
-      }
-    }
+      if (untangled.rounds == 0) return;
+      UpdateVertexNormals(&mesh);
+      level_report.crossing_untangled += untangled.pairs_before;
+      level_report.untangle_moved += untangled.vertices_moved;
+      if (level == finest) update_products_surface();
+      say("  level " + std::to_string(level) + ": " + std::to_string(untangled.pairs_before) +
+          " crossing triangle pairs untangled in " + std::to_string(untangled.rounds) + " rounds (" +
+          std::to_string(untangled.vertices_moved) + " vertices moved, " + std::to_string(untangled.pairs_after) +
+          " pairs left)");
+    };
+    untangle();
     // The polish (ReconstructionOptions::polish_robust_k): the finest level once more from
     // its finished surface, with robust weights, then relaxed and untangled as above.
     if (level == finest && options.polish_robust_k >= 0.0) {
@@ -689,14 +690,9 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
           std::to_string(adjusted.summary.rejected) + " observations rejected, " +
           std::to_string(adjusted.summary.downweighted) + " down-weighted");
       if (relax_now) relax_unseen();
-      if (options.untangle) {
-        const UntangleReport untangled = UntangleSelfIntersections(&mesh);
-        crossing_left = untangled.pairs_after;
-        level_report.crossing_untangled += untangled.pairs_before;
-        level_report.untangle_moved += untangled.vertices_moved;
-      }
       UpdateVertexNormals(&mesh);
       update_products_surface();
+      untangle();
     }
     level_report.vertices = static_cast<int>(mesh.n_vertices());
     level_report.faces = static_cast<int>(mesh.n_faces());

@@ -139,7 +139,7 @@ struct ReconstructionOptions {
   // it costs as much as the finest level again). On the bundled block (docs/EXPERIMENTS.md,
   // session 10) the finest level's residuals have a heavy tail (sigma0 10.9 against 5.8
   // robust, noise 4): with 2 the walls >= 2 views rise from 55.2 to 59.4 % complete at
-  // 1 GSD and the roof median falls from 0.146 to 0.096 GSD, at 128 s instead of 78 s.
+  // 1 GSD and the roof median falls from 0.146 to 0.096 GSD, at 130 s instead of 78 s.
   double polish_robust_k = -1.0;
   double polish_reject_k = 5.0;
   // Called with one line of progress at a time (stage, level, iteration, sigma0).
