@@ -261,6 +261,10 @@ std::string ClosedStart::Describe() const {
   } else if (given) {
     out << "closed start from the given mesh: " << given->n_vertices() << " vertices, "
         << given->n_faces() << " faces, centre " << centre.transpose();
+    if (given_repair.degenerate > 0) {
+      out << "; " << given_repair.degenerate << " triangles of no area repaired (" << given_repair.flipped
+          << " edge flips, " << given_repair.collapsed << " collapses)";
+    }
   } else if (fit) {
     if (!hull_points.empty()) out << "convex hull of " << hull_points.size() << " tie points around the ";
     const Ellipsoid& e = fit->ellipsoid;
@@ -278,6 +282,14 @@ ClosedStart PrepareClosedStart(const ImageBlock& block, const RegionOfInterest& 
   if (!options.mesh_file.empty()) {
     const MeshData data = ReadMesh(options.mesh_file);
     start.given = TinFromTriangles(data.vertices, data.faces, options.mesh_file);
+    // A G1 patch over a triangle of no area is not finite (the first split or
+    // tessellation would fail with a message that names no file).
+    start.given_repair = RepairDegenerateTriangles(&*start.given);
+    if (start.given_repair.left > 0) {
+      throw std::runtime_error(options.mesh_file + ": " + std::to_string(start.given_repair.left) +
+                               " triangles of no area (their corners on one line or one point) that "
+                               "neither an edge flip nor a collapse removes");
+    }
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (const auto& p : data.vertices) sum += p;
     start.centre = sum / static_cast<double>(data.vertices.size());

@@ -30,6 +30,7 @@
 #include "engine/window_adjustment.h"
 #include "io/image_block.h"
 #include "mesh/closed_surface.h"
+#include "mesh/local_ops.h"
 #include "mesh/tin.h"
 #include "visibility/visual_hull.h"
 
@@ -106,6 +107,7 @@ struct ClosedStart {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   std::optional<EllipsoidFit> fit;    // automatic start
   std::optional<TinMesh> given;       // start mesh file
+  DegenerateRepairReport given_repair;  // its triangles of no area (mesh/local_ops.h)
   std::vector<Eigen::Vector3d> hull_points;  // shape "hull": the fit's inliers
   std::optional<VisualHullGrid> visual_hull;  // shape "visual-hull"
   std::optional<HullViews> hull_views;        // the masks it was carved from (kept for hull_rims)

@@ -1,6 +1,7 @@
 #include "mesh/local_ops.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <deque>
 #include <numbers>
@@ -167,6 +168,100 @@ bool RemoveVertex(TinMesh* mesh, TinMesh::VertexHandle vh) {
   }
   mesh->garbage_collection();
   return true;
+}
+
+namespace {
+
+// The face's halfedges ordered by length: [0] shortest, [2] longest; false when the
+// face is not degenerate (least height >= relative_height x longest edge).
+bool DegenerateFace(const TinMesh& mesh, TinMesh::FaceHandle f, double relative_height,
+                    std::array<TinMesh::HalfedgeHandle, 3>* by_length) {
+  int k = 0;
+  for (auto h : mesh.fh_range(f)) (*by_length)[k++] = h;
+  std::sort(by_length->begin(), by_length->end(), [&](auto a, auto b) {
+    return mesh.calc_edge_length(a) < mesh.calc_edge_length(b);
+  });
+  const double longest = mesh.calc_edge_length((*by_length)[2]);
+  const double twice_area = (mesh.calc_edge_vector((*by_length)[0]) % mesh.calc_edge_vector((*by_length)[1])).norm();
+  return !(twice_area / longest >= relative_height * longest);
+}
+
+int CountDegenerate(const TinMesh& mesh, double relative_height) {
+  std::array<TinMesh::HalfedgeHandle, 3> by_length;
+  int count = 0;
+  for (auto f : mesh.faces()) count += DegenerateFace(mesh, f, relative_height, &by_length);
+  return count;
+}
+
+// Collapses `h` or its opposite (whichever OpenMesh allows; a boundary vertex is not
+// pulled off the boundary along an inner edge).
+bool CollapseEither(TinMesh* mesh, TinMesh::HalfedgeHandle h) {
+  for (auto c : {h, mesh->opposite_halfedge_handle(h)}) {
+    const bool from_boundary = mesh->is_boundary(mesh->from_vertex_handle(c));
+    if (from_boundary && !mesh->is_boundary(mesh->edge_handle(c))) continue;
+    if (!mesh->is_collapse_ok(c)) continue;
+    mesh->collapse(c);
+    return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+DegenerateRepairReport RepairDegenerateTriangles(TinMesh* mesh, double relative_height) {
+  DegenerateRepairReport report;
+  report.degenerate = CountDegenerate(*mesh, relative_height);
+  report.left = report.degenerate;
+  if (report.degenerate == 0) return report;
+  for (int round = 0; round < 10 && report.left > 0; ++round) {
+    bool changed = false;
+    std::vector<TinMesh::FaceHandle> faces(mesh->faces_begin(), mesh->faces_end());
+    std::array<TinMesh::HalfedgeHandle, 3> by_length;
+    for (auto f : faces) {
+      if (mesh->status(f).deleted() || !DegenerateFace(*mesh, f, relative_height, &by_length)) continue;
+      const double longest = mesh->calc_edge_length(by_length[2]);
+      if (mesh->calc_edge_length(by_length[0]) < relative_height * longest) {
+        if (CollapseEither(mesh, by_length[0])) {
+          ++report.collapsed;
+          changed = true;
+        }
+        continue;
+      }
+      // A cap: the vertex opposite the longest edge lies on it. Flip that edge when the
+      // vertex across it is off the line (else the flip makes another cap).
+      const auto e = mesh->edge_handle(by_length[2]);
+      const auto apex = mesh->to_vertex_handle(mesh->next_halfedge_handle(by_length[2]));
+      const auto a = mesh->from_vertex_handle(by_length[2]), b = mesh->to_vertex_handle(by_length[2]);
+      if (!mesh->is_boundary(e) && mesh->is_flip_ok(e)) {
+        const auto across = mesh->opposite_halfedge_handle(by_length[2]);
+        const auto other = mesh->to_vertex_handle(mesh->next_halfedge_handle(across));
+        const double height = ((mesh->point(b) - mesh->point(a)) % (mesh->point(other) - mesh->point(a))).norm() / longest;
+        if (height >= relative_height * longest) {
+          mesh->flip(e);
+          ++report.flipped;
+          changed = true;
+          continue;
+        }
+      }
+      // Otherwise (the boundary, or a flat fan) the cap vertex goes into the nearer end of
+      // the long edge, or the farther one.
+      const bool a_nearer = (mesh->point(apex) - mesh->point(a)).norm() <= (mesh->point(apex) - mesh->point(b)).norm();
+      for (auto end : {a_nearer ? a : b, a_nearer ? b : a}) {
+        const auto h = mesh->find_halfedge(apex, end);
+        if (h.is_valid() && CollapseEither(mesh, h)) {
+          ++report.collapsed;
+          changed = true;
+          break;
+        }
+      }
+    }
+    if (!changed) break;
+    mesh->garbage_collection();
+    report.left = CountDegenerate(*mesh, relative_height);
+  }
+  mesh->update_face_normals();
+  UpdateVertexNormals(mesh);
+  return report;
 }
 
 void SmoothingOptions::Check() const {

@@ -90,6 +90,24 @@ int CountLongEdges(const TinMesh& mesh, const QualityOptions& options);
 // surface around it. Vertex normals are not updated. Returns the vertices relaxed.
 int RelaxUnseenVertices(TinMesh* mesh, const std::vector<int>& views, int iterations = 100);
 
+// Triangles of (nearly) no area in a mesh from elsewhere (a start mesh from another
+// program, points snapped onto one line): the G1 patch of such a triangle divides by
+// its zero area, so a split or a tessellation there is not finite. A triangle is
+// degenerate when its least height is below relative_height x its longest edge. A
+// needle (its shortest edge below relative_height x its longest: two points on top of
+// each other) loses that edge by a collapse; a cap (one vertex on the opposite edge)
+// has that edge flipped, or, on the boundary, its vertex collapsed into the nearer end
+// of that edge. Repeated until none is left or nothing more can be done. Calls
+// garbage_collection() when it changed anything (handles and indices invalidated);
+// face and vertex normals are updated.
+struct DegenerateRepairReport {
+  int degenerate = 0;  // degenerate triangles found before the repair
+  int collapsed = 0;
+  int flipped = 0;
+  int left = 0;        // degenerate triangles after the repair
+};
+DegenerateRepairReport RepairDegenerateTriangles(TinMesh* mesh, double relative_height = 1e-6);
+
 // Mean over faces of the smallest angle (radians), and the smallest over all faces.
 struct AngleStats {
   double min_angle = 0.0;

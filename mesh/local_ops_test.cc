@@ -256,5 +256,76 @@ TEST(LocalOps, QualityPassSplitsWall) {
   EXPECT_EQ(bad, 0);
 }
 
+// A 3 x 3 grid of 1 m, each cell cut by its diagonal from (i, j) to (i + 1, j + 1),
+// counter-clockwise from +Z, with its middle vertex (1, 1) at `middle`.
+TinMesh GridWithMiddleAt(const Vector3d& middle) {
+  TinMesh mesh;
+  std::vector<TinMesh::VertexHandle> v;
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) v.push_back(mesh.add_vertex(ToOpenMesh(i == 1 && j == 1 ? middle : Vector3d(i, j, 0))));
+  }
+  for (int j = 0; j < 2; ++j) {
+    for (int i = 0; i < 2; ++i) {
+      const int a = 3 * j + i;
+      mesh.add_face(v[a], v[a + 1], v[a + 4]);
+      mesh.add_face(v[a], v[a + 4], v[a + 3]);
+    }
+  }
+  UpdateVertexNormals(&mesh);
+  return mesh;
+}
+
+double SmallestHeightRatio(const TinMesh& mesh) {
+  double least = 1e300;
+  for (auto f : mesh.faces()) {
+    std::vector<Vector3d> p;
+    for (auto v : mesh.fv_range(f)) p.push_back(ToEigen(mesh.point(v)));
+    const double longest = std::max({(p[1] - p[0]).norm(), (p[2] - p[1]).norm(), (p[0] - p[2]).norm()});
+    least = std::min(least, (p[1] - p[0]).cross(p[2] - p[0]).norm() / (longest * longest));
+  }
+  return least;
+}
+
+TEST(LocalOps, RepairFlipsAnInnerCap) {
+  // The middle vertex on the segment between its ring neighbours (1, 0) and (2, 1): the
+  // triangle of the three has no area; the triangle across that edge, with (2, 0), does.
+  TinMesh mesh = GridWithMiddleAt(Vector3d(1.5, 0.5, 0));
+  ASSERT_EQ(mesh.n_faces(), 8u);
+  const DegenerateRepairReport r = RepairDegenerateTriangles(&mesh);
+  EXPECT_EQ(r.degenerate, 1);
+  EXPECT_EQ(r.flipped, 1);
+  EXPECT_EQ(r.collapsed, 0);
+  EXPECT_EQ(r.left, 0);
+  EXPECT_EQ(mesh.n_faces(), 8u);
+  EXPECT_GT(SmallestHeightRatio(mesh), 0.1);
+}
+
+TEST(LocalOps, RepairCollapsesANeedleAndABoundaryCap) {
+  // The middle vertex on top of (1, 0): two needles (its edge to (1, 0) has no length).
+  TinMesh needle = GridWithMiddleAt(Vector3d(1, 0, 0));
+  const DegenerateRepairReport n = RepairDegenerateTriangles(&needle);
+  EXPECT_EQ(n.degenerate, 2);
+  EXPECT_EQ(n.left, 0);
+  EXPECT_EQ(n.collapsed, 1);
+  EXPECT_EQ(needle.n_vertices(), 8u);
+  EXPECT_EQ(needle.n_faces(), 6u);
+  EXPECT_GT(SmallestHeightRatio(needle), 0.1);
+  for (auto v : needle.vertices()) EXPECT_TRUE(needle.normal(v).norm() > 0.99);
+  // On the boundary edge from (0, 0) to (1, 0), halfway: a cap whose long edge has no
+  // triangle across; the vertex goes into an end of that edge.
+  TinMesh cap = GridWithMiddleAt(Vector3d(0.5, 0, 0));
+  const DegenerateRepairReport c = RepairDegenerateTriangles(&cap);
+  EXPECT_EQ(c.degenerate, 1);
+  EXPECT_EQ(c.left, 0);
+  EXPECT_EQ(c.collapsed, 1);
+  EXPECT_EQ(cap.n_vertices(), 8u);
+  EXPECT_GT(SmallestHeightRatio(cap), 0.1);
+  // A sound mesh is left alone.
+  TinMesh sound = GridWithMiddleAt(Vector3d(1, 1, 0.2));
+  const DegenerateRepairReport s = RepairDegenerateTriangles(&sound);
+  EXPECT_EQ(s.degenerate, 0);
+  EXPECT_EQ(sound.n_vertices(), 9u);
+}
+
 }  // namespace
 }  // namespace facets
