@@ -1,12 +1,19 @@
 #!/usr/bin/env python3
-# Usage: python3 scripts/snap_to_truth.py RUN/tin.ply SCENE/truth.ply OUT.ply
+# Usage: python3 scripts/snap_to_truth.py RUN/tin.ply SCENE/truth.ply OUT.ply [--bands STEP]
 # The oracle start of docs/EXPERIMENTS.md (walls, session 8): every vertex of a run's TIN
 # moved to its closest point on the rendered truth mesh, same triangles, written as a
 # PLY that `facets reconstruct --start-mesh OUT.ply --levels 1` takes. It tells how well
 # the finest level holds a surface that starts right, apart from how the multigrid gets
 # there. Prints how far the vertices moved (wall-like: |nz| < 0.5; views < 2 / >= 2).
+# OUT.ply "-": nothing written (only the distances). --bands STEP: the wall-like
+# vertices' distances per height band of STEP m (where a level loses its walls: eaves and
+# feet or all over, docs/EXPERIMENTS.md session 11). Works on the levels/level_K.ply of
+# `--keep-levels` too (they carry no views).
 # Needs numpy (Debian: python3-numpy, run with /usr/bin/python3).
 import sys, numpy as np
+band_step = None
+if '--bands' in sys.argv:
+    k = sys.argv.index('--bands'); band_step = float(sys.argv[k + 1]); del sys.argv[k:k + 2]
 def read_ply(path):
     f = open(path, 'rb'); props = []; elems = []
     while True:
@@ -66,13 +73,23 @@ for k in range(len(Q)):
 ds = np.array(ds)
 print('moved: median %.3f p90 %.3f max %.3f m' % (np.median(ds), np.percentile(ds, 90), ds.max()), file=sys.stderr)
 v2 = v.copy(); v2['x'] = out[:, 0]; v2['y'] = out[:, 1]; v2['z'] = out[:, 2]
-with open(sys.argv[3], 'wb') as f:
-    f.write(open(sys.argv[1], 'rb').read(h2)); f.write(v2.tobytes()); f.write(data2[v.nbytes:])
+if sys.argv[3] != '-':
+    with open(sys.argv[3], 'wb') as f:
+        f.write(open(sys.argv[1], 'rb').read(h2)); f.write(v2.tobytes()); f.write(data2[v.nbytes:])
 nz = np.abs(v['nz']); wall = nz < 0.5
 for name, m in [('wall-like', wall), ('flat', ~wall)]:
     d = ds[m]
     if len(d): print('%s: %d vertices, median %.3f p75 %.3f p90 %.3f, >0.12 m %.1f %%, >0.5 m %.1f %%' % (name, len(d), np.median(d), np.percentile(d, 75), np.percentile(d, 90), 100*np.mean(d > 0.12), 100*np.mean(d > 0.5)), file=sys.stderr)
-vw = v['views']
-for name, m in [('views<2', vw < 2), ('views>=2', vw >= 2)]:
-    d = ds[m]
-    if len(d): print('%s: %d, median %.3f p90 %.3f' % (name, len(d), np.median(d), np.percentile(d, 90)), file=sys.stderr)
+if 'views' in v.dtype.names:
+    vw = v['views']
+    for name, m in [('views<2', vw < 2), ('views>=2', vw >= 2)]:
+        d = ds[m]
+        if len(d): print('%s: %d, median %.3f p90 %.3f' % (name, len(d), np.median(d), np.percentile(d, 90)), file=sys.stderr)
+if band_step:
+    z = Q[:, 2]
+    for lo in np.arange(np.floor(z[wall].min() / band_step) * band_step, z[wall].max() + 1e-9, band_step):
+        m = wall & (z >= lo) & (z < lo + band_step)
+        if m.sum():
+            d = ds[m]
+            print('wall-like z %6.1f..%6.1f m: %4d vertices, median %.3f p75 %.3f p90 %.3f m, >0.12 m %3.0f %%' % (
+                lo, lo + band_step, m.sum(), np.median(d), np.percentile(d, 75), np.percentile(d, 90), 100 * np.mean(d > 0.12)), file=sys.stderr)
