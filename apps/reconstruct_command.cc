@@ -93,6 +93,7 @@ struct ReconstructArgs {
   bool normal_search_support = false;
   int normal_search_rounds = ReconstructionOptions().normal_search_rounds;
   int normal_search_rounds_last_level = ReconstructionOptions().normal_search_rounds_last_level;
+  double normal_search_tolerance = ReconstructionOptions().normal_search_tolerance;
   double normal_search_min_cos = NormalSearchOptions().min_cos;
   double normal_search_max_here = NormalSearchOptions().max_score_here;
   double normal_search_min_angle = NormalSearchOptions().min_angle_to_views_deg;
@@ -212,6 +213,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.normal_search_rounds = args.normal_search_rounds;
   if (args.polish) options.polish_robust_k = *args.polish;
   options.normal_search_rounds_last_level = args.normal_search_rounds_last_level;
+  options.normal_search_tolerance = args.normal_search_tolerance;
   options.normal_search_options.min_cos = args.normal_search_min_cos;
   options.normal_search_options.max_score_here = args.normal_search_max_here;
   options.normal_search_options.min_angle_to_views_deg = args.normal_search_min_angle;
@@ -445,6 +447,11 @@ void AddReconstructCommand(CLI::App& app) {
                   "normal search: finest pyramid level with rounds")
       ->capture_default_str()
       ->check(CLI::Range(0, 20));
+  sub->add_option("--normal-search-tolerance", args->normal_search_tolerance,
+                  "normal search: a round is kept when sigma0 stays below (1 + this) x sigma0 before it (0 = only "
+                  "when it drops)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   sub->add_option("--normal-search-min-angle", args->normal_search_min_angle,
                   "normal search: only vertices whose normal turns more than this (deg) from the mean direction to "
                   "the images that see them (0 = all; 45: walls of an aerial block)")

@@ -174,6 +174,7 @@ void ReconstructionOptions::Check() const {
   if (wall_passes < 0 || wall_passes > 10) fail("wall_passes must lie in 0..10");
   if (tangential_smoothing < 0 || tangential_smoothing > 10) fail("tangential_smoothing must lie in 0..10");
   if (straighten_rounds < 0 || straighten_rounds > 10) fail("straighten_rounds must lie in 0..10");
+  if (!(normal_search_tolerance >= 0.0 && normal_search_tolerance <= 1.0)) fail("normal_search_tolerance must lie in 0..1");
   if (lifting_steps > 0 && !(lifting_range > 0)) fail("lifting_range must be > 0");
   if (roi && !(roi->max.array() > roi->min.array()).head<2>().all()) {
     fail("region of interest is empty");
@@ -582,7 +583,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       if (ns.moved == 0) break;
       LevelAdjustment again = AdjustLevelInWindows(&mesh, window_images(level), level_options(level),
                                                    options.windows, level == finest, options.progress);
-      const bool better = again.summary.sigma0 < adjusted.summary.sigma0;
+      const bool better = again.summary.sigma0 < adjusted.summary.sigma0 * (1.0 + options.normal_search_tolerance);
       say("  level " + std::to_string(level) + " normal search round " + std::to_string(round + 1) + ": " +
           std::to_string(ns.moved) + " moved (median " + std::to_string(ns.median_move) + " m); sigma0 " +
           std::to_string(again.summary.sigma0) + " against " + std::to_string(adjusted.summary.sigma0) +

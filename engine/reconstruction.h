@@ -132,6 +132,13 @@ struct ReconstructionOptions {
   // coarsest, searched every vertex, a roof fell).
   int normal_search_rounds = 2;
   int normal_search_rounds_last_level = 1;
+  // A round is kept unless sigma0 after it exceeds (1 + this) x sigma0 before; 0: kept
+  // only when sigma0 drops. The rounds move a few hundred wall vertices among millions of
+  // observations, so sigma0 changes by a few tenths of a percent either way (level 0 of
+  // the whole block: 10.868 -> 10.871) while the block's walls gain 6-15 points with
+  // rounds kept on every level; not the default: the real Boruszyn walls lose (22.9 ->
+  // 16.2 % of the area within 5 deg with 0.02; docs/EXPERIMENTS.md, session 11).
+  double normal_search_tolerance = 0.0;
   NormalSearchOptions normal_search_options;
   // After the finest level (its relaxation and untangling included): adjust it once more
   // from there, with Huber weights beyond polish_robust_k robust sigmas and rejection
