@@ -172,8 +172,14 @@ bool RemoveVertex(TinMesh* mesh, TinMesh::VertexHandle vh) {
 
 namespace {
 
-// The face's halfedges ordered by length: [0] shortest, [2] longest; false when the
-// face is not degenerate (least height >= relative_height x longest edge).
+// A triangle of this doubled area and longest edge has no area to speak of: its least
+// height is below relative_height x the longest edge.
+bool NoArea(double twice_area, double longest, double relative_height) {
+  return !(twice_area / longest >= relative_height * longest);
+}
+
+// The face's halfedges ordered by length: [0] shortest, [2] longest; whether the face has
+// no area (NoArea).
 bool DegenerateFace(const TinMesh& mesh, TinMesh::FaceHandle f, double relative_height,
                     std::array<TinMesh::HalfedgeHandle, 3>* by_length) {
   int k = 0;
@@ -183,7 +189,7 @@ bool DegenerateFace(const TinMesh& mesh, TinMesh::FaceHandle f, double relative_
   });
   const double longest = mesh.calc_edge_length((*by_length)[2]);
   const double twice_area = (mesh.calc_edge_vector((*by_length)[0]) % mesh.calc_edge_vector((*by_length)[1])).norm();
-  return !(twice_area / longest >= relative_height * longest);
+  return NoArea(twice_area, longest, relative_height);
 }
 
 int CountDegenerate(const TinMesh& mesh, double relative_height) {
@@ -235,8 +241,8 @@ DegenerateRepairReport RepairDegenerateTriangles(TinMesh* mesh, double relative_
       if (!mesh->is_boundary(e) && mesh->is_flip_ok(e)) {
         const auto across = mesh->opposite_halfedge_handle(by_length[2]);
         const auto other = mesh->to_vertex_handle(mesh->next_halfedge_handle(across));
-        const double height = ((mesh->point(b) - mesh->point(a)) % (mesh->point(other) - mesh->point(a))).norm() / longest;
-        if (height >= relative_height * longest) {
+        const double twice_area = ((mesh->point(b) - mesh->point(a)) % (mesh->point(other) - mesh->point(a))).norm();
+        if (!NoArea(twice_area, longest, relative_height)) {
           mesh->flip(e);
           ++report.flipped;
           changed = true;

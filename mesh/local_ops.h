@@ -96,10 +96,10 @@ int RelaxUnseenVertices(TinMesh* mesh, const std::vector<int>& views, int iterat
 // degenerate when its least height is below relative_height x its longest edge. A
 // needle (its shortest edge below relative_height x its longest: two points on top of
 // each other) loses that edge by a collapse; a cap (one vertex on the opposite edge)
-// has that edge flipped, or, on the boundary, its vertex collapsed into the nearer end
-// of that edge. Repeated until none is left or nothing more can be done. Calls
-// garbage_collection() when it changed anything (handles and indices invalidated);
-// face and vertex normals are updated.
+// has that edge flipped, or, where it cannot be (the boundary, or the vertex across on
+// the line too), its vertex collapsed into the nearer end of that edge. Repeated until
+// none is left or nothing more can be done. When it found any: garbage_collection()
+// (handles and indices invalidated), face and vertex normals updated.
 struct DegenerateRepairReport {
   int degenerate = 0;  // degenerate triangles found before the repair
   int collapsed = 0;
