@@ -91,6 +91,7 @@ struct ReconstructArgs {
   bool normal_search_on = false, normal_search_off = false;
   int normal_search_last_level = ReconstructionOptions().normal_search_last_level;
   bool normal_search_support = false;
+  bool normal_search_corners = false;
   int normal_search_rounds = ReconstructionOptions().normal_search_rounds;
   int normal_search_rounds_last_level = ReconstructionOptions().normal_search_rounds_last_level;
   double normal_search_tolerance = ReconstructionOptions().normal_search_tolerance;
@@ -210,6 +211,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   if (args.normal_search_off) options.normal_search = false;
   options.normal_search_last_level = args.normal_search_last_level;
   options.normal_search_options.support_filter = args.normal_search_support;
+  options.normal_search_options.corners = args.normal_search_corners;
   options.normal_search_rounds = args.normal_search_rounds;
   if (args.polish) options.polish_robust_k = *args.polish;
   options.normal_search_rounds_last_level = args.normal_search_rounds_last_level;
@@ -425,6 +427,9 @@ void AddReconstructCommand(CLI::App& app) {
       ->check(CLI::Range(0, 20));
   sub->add_flag("--normal-search-support", args->normal_search_support,
                 "normal search: keep a peak that a neighbour's peak supports (instead of the median)");
+  sub->add_flag("--normal-search-corners", args->normal_search_corners,
+                "normal search: vertices on ramps (normal 20-70 deg from vertical: a rounded foot or eave) also try "
+                "a wall through them (moving horizontally) and a roof or ground (moving vertically)");
   sub->add_option("--polish", args->polish,
                   "after the finest level: adjust it once more from its finished surface, with Huber weights beyond K "
                   "robust sigmas and rejection beyond 5 (0 = plain least squares; off by default: it costs as much "

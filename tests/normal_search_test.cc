@@ -10,9 +10,12 @@
 #include "engine/normal_search.h"
 #include "engine/reconstruction.h"
 #include "io/colmap_io.h"
+#include "mesh/closed_surface.h"
+#include "scenes/evaluate.h"
 #include "scenes/renderer.h"
 #include "scenes/scene.h"
 #include "scenes/truth_mesh.h"
+#include "tests/rendered_scene.h"
 #include "tests/truth_start.h"
 
 namespace facets {
@@ -143,6 +146,71 @@ TEST_F(NormalSearchGable, ReconstructSearchesEveryFinerLevel) {
   const double median = Median(HeightErrors(r.mesh));
   std::cout << "height error median " << median << " m, sigma0 " << r.report.levels.back().window.sigma0 << "\n";
   EXPECT_LT(median, 0.1 * scene_->ground_pixel_size);
+}
+
+// Corner hypotheses (NormalSearchOptions::corners) on the block's 10 x 10 x 4 m flat
+// building: a 2.5D start blurred over 4 m has its walls as 45-degree ramps, from the
+// ground 2 m outside each wall up to the roof 2 m inside, the shape a coarse level
+// leaves at a foot and an eave. A search along the ramp's normals looks for a 45-degree
+// plane that is not there; with the corner hypotheses the ramp vertices move onto the
+// walls (horizontally) or onto the roof and ground (vertically), and more of the walls
+// that two images see lie within a ground pixel of the TIN.
+TEST(NormalSearchCorners, RampsAroundTheSmallBuildingGoOntoItsWalls) {
+  const RenderedScene scene = RenderAndRead("scenes/data/block.json", testing::TempDir() + "/facets_corners_block");
+  const TruthMesh truth_mesh = BuildTruthMesh(scene.scene);
+  const Renderer renderer(scene.scene, truth_mesh);
+  LoadedImages loaded;
+  LoadLevelImages(scene.block, /*grey=*/true, &loaded);
+  const double gsd = scene.scene.ground_pixel_size;
+  StartGridOptions grid;
+  grid.min = Eigen::Vector2d(8, -26);
+  grid.max = Eigen::Vector2d(28, -6);
+  grid.spacing = 0.5;
+  grid.height = [&](double x, double y) {  // mean of the truth over 4 x 4 m
+    double sum = 0.0;
+    for (int i = -4; i <= 4; ++i) {
+      for (int j = -4; j <= 4; ++j) sum += TruthHeight(renderer, x + 0.5 * i, y + 0.5 * j);
+    }
+    return sum / 81.0;
+  };
+  const TinMesh start = MakeStartGrid(grid);
+  const TruthScene truth = ReadTruthScene(scene.dir);
+  EvaluationOptions evaluation;
+  RegionOfInterest roi;
+  roi.min = Eigen::Vector3d(10, -24, -3);
+  roi.max = Eigen::Vector3d(26, -8, 10);
+  evaluation.roi = roi;
+  struct Score {
+    double walls = 0.0;  // wall truth seen by >= 2 images within 1 ground pixel of the TIN
+    double ground = 0.0;  // median distance of the TIN's ground samples (m)
+  };
+  auto score = [&](const TinMesh& mesh) {
+    MeshData surface;
+    TinPointsAndTriangles(mesh, &surface.vertices, &surface.faces);
+    const EvaluationReport report = Evaluate(truth, surface, evaluation);
+    return Score{report.Region("wall")->multi_view.within[1], report.Region("ground")->accuracy.median};
+  };
+  auto search = [&](bool corners, NormalSearchReport* report) {
+    TinMesh mesh = start;
+    UpdateVertexNormals(&mesh);
+    NormalSearchOptions options;
+    options.corners = corners;
+    options.range_pixels = 20.0;  // the ramp reaches 2 m = 17 pixels from the wall
+    *report = SearchAlongNormals(&mesh, loaded.images, gsd, options);
+    return mesh;
+  };
+  NormalSearchReport along, corners;
+  const Score before = score(start);
+  const Score normals_only = score(search(false, &along));
+  const Score with_corners = score(search(true, &corners));
+  std::cout << "walls >= 2 views within 1 GSD: start " << before.walls << ", along the normals " << normals_only.walls
+            << " (" << along.moved << " moved), with corners " << with_corners.walls << " (" << corners.moved
+            << " moved, " << corners.corner_peaks << " of " << corners.peaks << " peaks at corners); ground median "
+            << before.ground << " / " << normals_only.ground << " / " << with_corners.ground << " m\n";
+  EXPECT_EQ(along.corner_peaks, 0);
+  EXPECT_GT(corners.corner_peaks, 50);
+  EXPECT_GT(with_corners.walls, normals_only.walls + 0.1);
+  EXPECT_LT(with_corners.ground, 2.0 * gsd);
 }
 
 }  // namespace
