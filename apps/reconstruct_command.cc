@@ -92,6 +92,9 @@ struct ReconstructArgs {
   int normal_search_last_level = ReconstructionOptions().normal_search_last_level;
   bool normal_search_support = false;
   bool normal_search_corners = false;
+  int v_cycles = ReconstructionOptions().v_cycles;
+  int v_cycle_level = ReconstructionOptions().v_cycle_level;
+  double v_cycle_robust = ReconstructionOptions().v_cycle_robust_k;
   int normal_search_rounds = ReconstructionOptions().normal_search_rounds;
   int normal_search_rounds_last_level = ReconstructionOptions().normal_search_rounds_last_level;
   double normal_search_tolerance = ReconstructionOptions().normal_search_tolerance;
@@ -212,6 +215,9 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.normal_search_last_level = args.normal_search_last_level;
   options.normal_search_options.support_filter = args.normal_search_support;
   options.normal_search_options.corners = args.normal_search_corners;
+  options.v_cycles = args.v_cycles;
+  options.v_cycle_level = args.v_cycle_level;
+  options.v_cycle_robust_k = args.v_cycle_robust;
   options.normal_search_rounds = args.normal_search_rounds;
   if (args.polish) options.polish_robust_k = *args.polish;
   options.normal_search_rounds_last_level = args.normal_search_rounds_last_level;
@@ -427,6 +433,19 @@ void AddReconstructCommand(CLI::App& app) {
       ->check(CLI::Range(0, 20));
   sub->add_flag("--normal-search-support", args->normal_search_support,
                 "normal search: keep a peak that a neighbour's peak supports (instead of the median)");
+  sub->add_option("--v-cycles", args->v_cycles,
+                  "after the finest level: go back up to --v-cycle-level (its TIN put onto the finished surface) "
+                  "and adjust down again, this often (0 = off; each costs those levels again)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 10));
+  sub->add_option("--v-cycle-level", args->v_cycle_level, "v-cycles: the pyramid level to go back up to")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 20));
+  sub->add_option("--v-cycle-robust", args->v_cycle_robust,
+                  "v-cycles: Huber weights beyond K robust sigmas and rejection beyond 5 on their levels (0 = plain "
+                  "least squares)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   sub->add_flag("--normal-search-corners", args->normal_search_corners,
                 "normal search: vertices on ramps (normal 20-70 deg from vertical: a rounded foot or eave) also try "
                 "a wall through them (moving horizontally) and a roof or ground (moving vertically)");

@@ -304,17 +304,10 @@ NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImag
     mesh->set_point(mesh->vertex_handle(static_cast<int>(v)), ToOpenMesh(points[v] + moves[v]));
   }
   report.limited = LimitFoldingSteps(mesh, before);
-  std::vector<double> moved;
-  for (auto vh : mesh->vertices()) {
-    const double d = (ToEigen(mesh->point(vh)) - before[vh.idx()]).norm();
-    if (d >= least) moved.push_back(d);
-  }
-  report.moved = static_cast<int>(moved.size());
-  if (!moved.empty()) {
-    std::nth_element(moved.begin(), moved.begin() + moved.size() / 2, moved.end());
-    report.median_move = moved[moved.size() / 2];
-    report.max_move = *std::max_element(moved.begin(), moved.end());
-  }
+  const VertexMoves moved = MeasureVertexMoves(*mesh, before, least);
+  report.moved = moved.moved;
+  report.median_move = moved.median;
+  report.max_move = moved.max;
   UpdateVertexNormals(mesh);
   return report;
 }

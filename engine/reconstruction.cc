@@ -174,6 +174,10 @@ void ReconstructionOptions::Check() const {
   if (wall_passes < 0 || wall_passes > 10) fail("wall_passes must lie in 0..10");
   if (tangential_smoothing < 0 || tangential_smoothing > 10) fail("tangential_smoothing must lie in 0..10");
   if (straighten_rounds < 0 || straighten_rounds > 10) fail("straighten_rounds must lie in 0..10");
+  if (v_cycles < 0 || v_cycles > 10) fail("v_cycles must lie in 0..10");
+  if (v_cycles > 0 && v_cycle_level < 1) fail("v_cycle_level must be >= 1 (a level above the finest)");
+  if (!(v_cycle_robust_k >= 0.0)) fail("v_cycle_robust_k must be >= 0");
+  if (v_cycle_robust_k > 0.0 && !(v_cycle_reject_k > v_cycle_robust_k)) fail("v_cycle_reject_k must exceed v_cycle_robust_k");
   if (!(normal_search_tolerance >= 0.0 && normal_search_tolerance <= 1.0)) fail("normal_search_tolerance must lie in 0..1");
   if (lifting_steps > 0 && !(lifting_range > 0)) fail("lifting_range must be > 0");
   if (roi && !(roi->max.array() > roi->min.array()).head<2>().all()) {
@@ -219,10 +223,21 @@ std::string ReconstructionReport::Json() const {
     l["edge_length"] = level.edge_length;
     l["smoothed"] = level.smoothed;
     l["normal_search_rounds"] = level.normal_search_rounds;
+    if (level.cycle > 0) {
+      l["cycle"] = level.cycle;
+      const ProjectionReport& p = level.projection;
+      l["v_cycle_projection"] = {{"moved", p.moved},
+                                 {"missed", p.missed},
+                                 {"limited", p.limited},
+                                 {"median_move", p.median_move},
+                                 {"max_move", p.max_move}};
+    }
     const NormalSearchReport& ns = level.normal_search;
     if (ns.searched > 0) {
-      l["normal_search"] = {{"searched", ns.searched}, {"peaks", ns.peaks}, {"corner_peaks", ns.corner_peaks},     {"moved", ns.moved},
-                            {"limited", ns.limited},   {"median_move", ns.median_move}, {"max_move", ns.max_move}};
+      l["normal_search"] = {{"searched", ns.searched},         {"peaks", ns.peaks},
+                            {"corner_peaks", ns.corner_peaks}, {"moved", ns.moved},
+                            {"limited", ns.limited},           {"median_move", ns.median_move},
+                            {"max_move", ns.max_move}};
     }
     l["break_off"] = level.break_off;
     l["vertices"] = level.vertices;
@@ -405,8 +420,13 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
   auto edge_length = [&](int level) {
     return kSubdivisions * options.facet_pixels * gsd0 * std::pow(2.0, level);
   };
+  int cycle = 0;  // of the level being adjusted: 0 = the descent, 1.. = the V-cycles
   auto level_options = [&](int level) {
     AdjustmentOptions adjustment = options.adjustment;
+    if (cycle > 0) {
+      adjustment.robust_k = options.v_cycle_robust_k;
+      adjustment.reject_k = options.v_cycle_robust_k > 0.0 ? options.v_cycle_reject_k : 0.0;
+    }
     adjustment.break_off = options.break_off_gsd > 0.0
                                ? options.break_off_gsd * gsd0 * std::pow(2.0, level)
                                : adjustment.break_off * std::pow(2.0, level);
@@ -471,11 +491,36 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     say(std::string("normal search: steep vertices") +
         (options.normal_search_options.corners ? " and ramps (corner hypotheses)" : "") + " before each finer level");
   }
-  for (int level = coarsest; level >= finest; --level) {
+  // The passes: the descent coarsest..finest, then each V-cycle top..finest.
+  std::vector<std::pair<int, int>> passes;  // (level, cycle)
+  for (int level = coarsest; level >= finest; --level) passes.emplace_back(level, 0);
+  const int cycle_top = std::min(options.v_cycle_level, coarsest);
+  if (cycle_top > finest) {
+    for (int c = 1; c <= options.v_cycles; ++c) {
+      for (int level = cycle_top; level >= finest; --level) passes.emplace_back(level, c);
+    }
+  } else if (options.v_cycles > 0) {
+    say("v-cycles skipped: no level above the finest to go back to");
+  }
+  TinMesh cycle_top_tin;  // the TIN the last pass at cycle_top left
+  for (size_t pass = 0; pass < passes.size(); ++pass) {
+    const int level = passes[pass].first;
+    cycle = passes[pass].second;
+    const bool last_pass = pass + 1 == passes.size();
     int smoothed = 0;
     const auto level_start = std::chrono::steady_clock::now();
     const AdjustmentOptions adjustment_options = level_options(level);
-    if (level != coarsest) {
+    ProjectionReport projection;
+    if (cycle > 0 && level == cycle_top) {
+      // Back up the pyramid: the level's TIN onto the finished finest surface.
+      mesh = std::move(cycle_top_tin);
+      projection = ProjectAlongNormals(&mesh, result.tessellation, edge_length(level));
+      say("stage v-cycle " + std::to_string(cycle) + "/" + std::to_string(options.v_cycles) + ": level " +
+          std::to_string(level) + "'s TIN onto the level-" + std::to_string(finest) + " surface, " +
+          std::to_string(projection.moved) + " vertices moved (median " + std::to_string(projection.median_move) +
+          " m, max " + std::to_string(projection.max_move) + " m), " + std::to_string(projection.missed) +
+          " without a hit, " + std::to_string(projection.limited) + " limited by the fold guard");
+    } else if (level != coarsest) {
       // One pyramid level down: quaternary subdivision keeps the shape (creases
       // included), the quality pass splits what walls stretched, tangential smoothing
       // on the creased G1 surface evens the triangles out.
@@ -500,6 +545,8 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       }
     }
     LevelReport level_report;
+    level_report.cycle = cycle;
+    level_report.projection = projection;
     // The normal search (before the level and in its rounds) reads the level's whole images
     // once; with tiled images they are freed with the level, not kept with the lifting's.
     const bool search_level = normal_search && level != coarsest && level >= options.normal_search_last_level;
@@ -525,8 +572,9 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     level_report.break_off = level_options(level).break_off;
     level_report.vertices = static_cast<int>(mesh.n_vertices());
     level_report.faces = static_cast<int>(mesh.n_faces());
-    say("stage adjust: level " + std::to_string(level) + " (" + std::to_string(coarsest - level + 1) +
-        "/" + std::to_string(num_levels - finest) + "), " + std::to_string(mesh.n_faces()) +
+    say("stage adjust: level " + std::to_string(level) + " (" + std::to_string(pass + 1) + "/" +
+        std::to_string(passes.size()) + (cycle > 0 ? ", v-cycle " + std::to_string(cycle) : "") + "), " +
+        std::to_string(mesh.n_faces()) +
         " faces, ground pixel " + std::to_string(level_report.ground_pixel) + " m, break-off " +
         std::to_string(level_report.break_off) + " m");
     LevelAdjustment adjusted = AdjustLevelInWindows(&mesh, window_images(level), level_options(level),
@@ -675,7 +723,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     untangle();
     // The polish (ReconstructionOptions::polish_robust_k): the finest level once more from
     // its finished surface, with robust weights, then relaxed and untangled as above.
-    if (level == finest && options.polish_robust_k >= 0.0) {
+    if (level == finest && last_pass && options.polish_robust_k >= 0.0) {
       AdjustmentOptions polish = level_options(level);
       polish.robust_k = options.polish_robust_k;
       polish.reject_k = options.polish_robust_k > 0.0 ? options.polish_reject_k : 0.0;
@@ -734,6 +782,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       result.vertex_flags = level_report.window.vertex_flags;
     }
     result.report.levels.push_back(std::move(level_report));
+    if (level == cycle_top && options.v_cycles > 0) cycle_top_tin = mesh;
   }
   result.mesh = std::move(mesh);
   result.report.seconds_total = Seconds(start);

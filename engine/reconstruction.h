@@ -19,6 +19,7 @@
 #include "engine/pyramid.h"
 #include "engine/start_closed.h"
 #include "engine/start_tiepoints.h"
+#include "engine/v_cycle.h"
 #include "engine/window_adjustment.h"
 #include "io/image_block.h"
 #include "mesh/tessellation.h"
@@ -149,6 +150,16 @@ struct ReconstructionOptions {
   // 1 GSD and the roof median falls from 0.146 to 0.096 GSD, at 130 s instead of 78 s.
   double polish_robust_k = -1.0;
   double polish_reject_k = 5.0;
+  // V-cycles (engine/v_cycle.h): after the finest level, go back up to pyramid level
+  // v_cycle_level: the TIN that level left, every vertex moved along its normal onto the
+  // finished finest surface (within one of its edges), then levels v_cycle_level..finest
+  // adjusted again, as often as v_cycles says. Its levels run with Huber weights beyond
+  // v_cycle_robust_k robust sigmas and rejection beyond v_cycle_reject_k (0: plain least
+  // squares). Off by default (0 cycles): a cycle costs those levels again.
+  int v_cycles = 0;
+  int v_cycle_level = 1;
+  double v_cycle_robust_k = 2.0;
+  double v_cycle_reject_k = 5.0;
   // Called with one line of progress at a time (stage, level, iteration, sigma0).
   std::function<void(const std::string&)> progress;
   // Called with each level's TIN once the level is finished (e.g. to keep it for a look
@@ -183,6 +194,9 @@ struct WallPass {
 
 struct LevelReport {
   int level = 0;               // pyramid level, 0 = the original images
+  int cycle = 0;               // 0: the descent; 1..: ReconstructionOptions::v_cycles
+  // Of a cycle's first level: its TIN's vertices moved onto the finest surface.
+  ProjectionReport projection;
   double ground_pixel = 0.0;   // mean ground pixel size of the level's images (m)
   double edge_length = 0.0;    // target TIN edge length (m)
   double break_off = 0.0;      // interior break-off bound of the level (m)

@@ -84,6 +84,22 @@ int CountSelfIntersections(const TinMesh& mesh) {
   return static_cast<int>(SelfIntersectingPairs(mesh, Points(mesh)).size());
 }
 
+VertexMoves MeasureVertexMoves(const TinMesh& mesh, const std::vector<Eigen::Vector3d>& before, double least) {
+  VertexMoves result;
+  std::vector<double> moves;
+  for (auto vh : mesh.vertices()) {
+    const double d = (ToEigen(mesh.point(vh)) - before[vh.idx()]).norm();
+    if (d >= least) moves.push_back(d);
+  }
+  result.moved = static_cast<int>(moves.size());
+  if (!moves.empty()) {
+    std::nth_element(moves.begin(), moves.begin() + moves.size() / 2, moves.end());
+    result.median = moves[moves.size() / 2];
+    result.max = *std::max_element(moves.begin(), moves.end());
+  }
+  return result;
+}
+
 int LimitFoldingSteps(TinMesh* mesh, const std::vector<Eigen::Vector3d>& before, int halvings) {
   const std::vector<Eigen::Vector3d> normals_before = FaceNormals(*mesh, before);
   std::vector<bool> folded_before(mesh->n_faces(), false);

@@ -27,6 +27,16 @@ int CountSelfIntersections(const TinMesh& mesh);
 // Vertex normals are not updated (the caller does). Returns the vertices limited.
 int LimitFoldingSteps(TinMesh* mesh, const std::vector<Eigen::Vector3d>& before, int halvings = 4);
 
+// How far the vertices went from `before` (one point per vertex): those that moved at
+// least `least` (m), their median and largest move. For the reports of steps that
+// LimitFoldingSteps guarded.
+struct VertexMoves {
+  int moved = 0;
+  double median = 0.0;
+  double max = 0.0;
+};
+VertexMoves MeasureVertexMoves(const TinMesh& mesh, const std::vector<Eigen::Vector3d>& before, double least);
+
 // Repair of crossings the per-window fold guard cannot see (between windows, after
 // splits): the vertices of crossing triangles, and from round 2 on their rings grown by
 // one per round, move halfway to the mean of their neighbours (three Jacobi sweeps per

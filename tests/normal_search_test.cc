@@ -148,6 +148,34 @@ TEST_F(NormalSearchGable, ReconstructSearchesEveryFinerLevel) {
   EXPECT_LT(median, 0.1 * scene_->ground_pixel_size);
 }
 
+// A V-cycle (ReconstructionOptions::v_cycles): after level 0 the pipeline goes back up
+// to level 1, its TIN put onto the level-0 surface, and down again; the report lists
+// the five passes, the projection moved the level-1 vertices, and the roof stays right.
+TEST_F(NormalSearchGable, VCycleGoesBackUpToLevelOneAndDownAgain) {
+  ReconstructionOptions options;
+  options.levels = 3;
+  options.start = StartSurfaceKind::kPlane;
+  options.v_cycles = 1;
+  options.v_cycle_level = 1;
+  ImageBlock block = *block_;
+  block.roi = scene_->roi;
+  const Reconstruction r = Reconstruct(block, options);
+  ASSERT_EQ(r.report.levels.size(), 5u);
+  const int levels[] = {2, 1, 0, 1, 0}, cycles[] = {0, 0, 0, 1, 1};
+  for (size_t k = 0; k < 5; ++k) {
+    EXPECT_EQ(r.report.levels[k].level, levels[k]);
+    EXPECT_EQ(r.report.levels[k].cycle, cycles[k]);
+  }
+  const ProjectionReport& p = r.report.levels[3].projection;
+  std::cout << "v-cycle: " << p.moved << " of " << r.report.levels[3].vertices << " level-1 vertices moved (median "
+            << p.median_move << " m), " << p.missed << " without a hit\n";
+  EXPECT_GT(p.moved, r.report.levels[3].vertices / 2);
+  EXPECT_NE(r.report.Json().find("\"v_cycle_projection\""), std::string::npos);
+  const double median = Median(HeightErrors(r.mesh));
+  std::cout << "height error median " << median << " m\n";
+  EXPECT_LT(median, 0.1 * scene_->ground_pixel_size);
+}
+
 // Corner hypotheses (NormalSearchOptions::corners) on the block's 10 x 10 x 4 m flat
 // building: a 2.5D start blurred over 4 m has its walls as 45-degree ramps, from the
 // ground 2 m outside each wall up to the roof 2 m inside, the shape a coarse level
