@@ -110,7 +110,7 @@ bool HoldsSearchBox(const LevelImage& image, const Eigen::Vector3d& p, const Eig
   return true;
 }
 
-// The scores along one direction with the patch in one plane.
+// The scores of offsets along one direction, the patch in the plane normal to it.
 struct Scan {
   double here = -std::numeric_limits<double>::infinity();  // at offset 0
   double best = -std::numeric_limits<double>::infinity();  // at the peak (when peak)
@@ -118,10 +118,10 @@ struct Scan {
   bool peak = false;    // an interior maximum of at least min_score
 };
 
-Scan ScanAlong(const Eigen::Vector3d& p, const Eigen::Vector3d& direction, const Eigen::Vector3d& plane_normal,
-               const std::vector<const LevelImage*>& images, double ground_pixel, const NormalSearchOptions& options) {
+Scan ScanAlong(const Eigen::Vector3d& p, const Eigen::Vector3d& direction, const std::vector<const LevelImage*>& images,
+               double ground_pixel, const NormalSearchOptions& options) {
   Scan result;
-  const auto [t1, t2] = TangentBasis(plane_normal);
+  const auto [t1, t2] = TangentBasis(direction);
   const int h = options.patch_half;
   std::vector<Eigen::Vector3d> patch;
   for (int i = -h; i <= h; ++i) {
@@ -154,7 +154,7 @@ Scan ScanAlong(const Eigen::Vector3d& p, const Eigen::Vector3d& direction, const
   return result;
 }
 
-// A direction to move along and the plane the patch lies in.
+// A direction to move along (the patch lies in the plane normal to it).
 struct Hypothesis {
   Eigen::Vector3d direction;
   bool corner = false;
@@ -214,11 +214,13 @@ NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImag
       // Which hypotheses the vertex tries: its normal when it is steep to its images
       // (a wall), the corner ones when it lies on a ramp.
       std::vector<Hypothesis> hypotheses;
-      if (images_seeing(normal)) {
+      const bool normal_seen = images_seeing(normal);
+      const std::vector<const LevelImage*> seeing_normal = seeing;  // corner hypotheses reuse `seeing`
+      if (normal_seen) {
         bool steep = true;
         if (options.min_angle_to_views_deg > 0.0) {
           Eigen::Vector3d towards = Eigen::Vector3d::Zero();
-          for (const LevelImage* image : seeing) towards += (centres[image - images.data()] - p).normalized();
+          for (const LevelImage* image : seeing_normal) towards += (centres[image - images.data()] - p).normalized();
           steep = towards.normalized().dot(normal) <= max_cos_to_views;
         }
         if (steep) hypotheses.push_back({normal, false});
@@ -234,7 +236,7 @@ NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImag
       // peak must beat by min_gain (the scan along the normal gives it).
       searched[v] = 1;
       Scan along_normal;
-      if (images_seeing(normal)) along_normal = ScanAlong(p, normal, normal, seeing, ground_pixel, options);
+      if (normal_seen) along_normal = ScanAlong(p, normal, seeing_normal, ground_pixel, options);
       const double here = along_normal.here;
       if (std::isfinite(here) && here >= options.max_score_here) continue;
       Candidate best;
@@ -243,7 +245,7 @@ NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImag
         Scan scan = along_normal;
         if (hypothesis.corner) {
           if (!images_seeing(hypothesis.direction)) continue;
-          scan = ScanAlong(p, hypothesis.direction, hypothesis.direction, seeing, ground_pixel, options);
+          scan = ScanAlong(p, hypothesis.direction, seeing, ground_pixel, options);
         }
         if (!scan.peak || scan.best <= best_score) continue;
         if (std::isfinite(here) && scan.best - here < options.min_gain) continue;

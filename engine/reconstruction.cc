@@ -782,7 +782,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       result.vertex_flags = level_report.window.vertex_flags;
     }
     result.report.levels.push_back(std::move(level_report));
-    if (level == cycle_top && options.v_cycles > 0) cycle_top_tin = mesh;
+    if (level == cycle_top && cycle < options.v_cycles) cycle_top_tin = mesh;  // the next cycle starts from it
   }
   result.mesh = std::move(mesh);
   result.report.seconds_total = Seconds(start);
