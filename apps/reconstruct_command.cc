@@ -92,6 +92,13 @@ struct ReconstructArgs {
   int normal_search_last_level = ReconstructionOptions().normal_search_last_level;
   bool normal_search_support = false;
   bool normal_search_corners = false;
+  bool plane_propagation = false;
+  int plane_iterations = PlanePropagationOptions().iterations;
+  double plane_source_score = PlanePropagationOptions().source_score;
+  double plane_max_move = PlanePropagationOptions().max_move_pixels;
+  double plane_min_gain = PlanePropagationOptions().min_gain;
+  double plane_min_tilt = PlanePropagationOptions().min_target_tilt_deg;
+  double plane_slack = PlanePropagationOptions().occluder_slack_pixels;
   int v_cycles = ReconstructionOptions().v_cycles;
   int v_cycle_level = ReconstructionOptions().v_cycle_level;
   double v_cycle_robust = ReconstructionOptions().v_cycle_robust_k;
@@ -215,6 +222,13 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.normal_search_last_level = args.normal_search_last_level;
   options.normal_search_options.support_filter = args.normal_search_support;
   options.normal_search_options.corners = args.normal_search_corners;
+  options.plane_propagation = args.plane_propagation;
+  options.plane_propagation_options.iterations = args.plane_iterations;
+  options.plane_propagation_options.source_score = args.plane_source_score;
+  options.plane_propagation_options.max_move_pixels = args.plane_max_move;
+  options.plane_propagation_options.min_gain = args.plane_min_gain;
+  options.plane_propagation_options.min_target_tilt_deg = args.plane_min_tilt;
+  options.plane_propagation_options.occluder_slack_pixels = args.plane_slack;
   options.v_cycles = args.v_cycles;
   options.v_cycle_level = args.v_cycle_level;
   options.v_cycle_robust_k = args.v_cycle_robust;
@@ -449,6 +463,35 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_flag("--normal-search-corners", args->normal_search_corners,
                 "normal search: vertices on ramps (normal 20-70 deg from vertical: a rounded foot or eave) also try "
                 "a wall through them (moving horizontally) and a roof or ground (moving vertically)");
+  sub->add_flag("--plane-propagation", args->plane_propagation,
+                "after each normal search: vertices whose images disagree where they are try the planes of "
+                "neighbours whose images agree (PatchMatch-like, a ring further per iteration)");
+  sub->add_option("--plane-iterations", args->plane_iterations, "plane propagation: iterations")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 50));
+  sub->add_option("--plane-source-score", args->plane_source_score,
+                  "plane propagation: vertices lend their plane at this mean pairwise correlation or more, and "
+                  "borrow below it")
+      ->capture_default_str()
+      ->check(CLI::Range(-1.0, 1.0));
+  sub->add_option("--plane-min-gain", args->plane_min_gain,
+                  "plane propagation: a borrowed plane must score this much above the vertex's own patch")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 2.0));
+  sub->add_option("--plane-min-tilt", args->plane_min_tilt,
+                  "plane propagation: only vertices whose normal turns at least this far (deg) from vertical borrow "
+                  "(0 = every vertex)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 90.0));
+  sub->add_option("--plane-occluder-slack", args->plane_slack,
+                  "plane propagation: a borrowed plane counts an image as seeing it when no surface lies in the way "
+                  "nearer than this many level pixels (at least the move)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 64.0));
+  sub->add_option("--plane-max-move", args->plane_max_move,
+                  "plane propagation: a vertex moves onto a plane at most this many level pixels away")
+      ->capture_default_str()
+      ->check(CLI::Range(0.5, 64.0));
   sub->add_option("--polish", args->polish,
                   "after the finest level: adjust it once more from its finished surface, with Huber weights beyond K "
                   "robust sigmas and rejection beyond 5 (0 = plain least squares; off by default: it costs as much "

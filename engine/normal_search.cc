@@ -8,6 +8,7 @@
 #include <limits>
 #include <utility>
 
+#include "engine/patch_score.h"
 #include "mesh/closed_surface.h"
 #include "mesh/surface_validity.h"
 #include "visibility/embree_scene.h"
@@ -15,80 +16,12 @@
 namespace facets {
 namespace {
 
-// Mean over channels, bilinear between pixel centres (pixel x covers [x, x + 1)).
-// False when the 2 x 2 neighbourhood is not all held.
-bool SampleGrey(const ImagePlanes& image, const Eigen::Vector2d& position, double* grey) {
-  const double u = position.x() - 0.5, v = position.y() - 0.5;
-  const double fu = std::floor(u), fv = std::floor(v);
-  const int x = static_cast<int>(fu), y = static_cast<int>(fv);
-  if (!image.Holds(x, y) || !image.Holds(x + 1, y + 1)) return false;
-  const double a = u - fu, b = v - fv;
-  double sum = 0.0;
-  for (int c = 0; c < image.channels; ++c) {
-    sum += (1 - a) * (1 - b) * image.at(c, x, y) + a * (1 - b) * image.at(c, x + 1, y) +
-           (1 - a) * b * image.at(c, x, y + 1) + a * b * image.at(c, x + 1, y + 1);
-  }
-  *grey = sum / image.channels;
-  return true;
-}
-
 struct Candidate {
   Eigen::Vector3d move = Eigen::Vector3d::Zero();
   double offset = 0.0;  // along the winning direction (the normal unless corner)
   bool peak = false;
   bool corner = false;  // won by a corner hypothesis
 };
-
-class VertexSearch {
- public:
-  VertexSearch(const std::vector<const LevelImage*>& images, const NormalSearchOptions& options)
-      : images_(images), options_(options) {}
-
-  double Score(const std::vector<Eigen::Vector3d>& samples) {
-    const size_t n = samples.size();
-    sum_.assign(n, 0.0);
-    g_.resize(n);
-    std::vector<double>& g = g_;
-    int used = 0;
-    for (const LevelImage* image : images_) {
-      bool ok = true;
-      for (size_t s = 0; s < n && ok; ++s) {
-        const Eigen::Vector3d in_cam = image->cam_from_world * samples[s];
-        ok = in_cam.z() > 0 && SampleGrey(*image->pixels, image->camera->ImageFromCam(in_cam), &g[s]);
-      }
-      if (!ok) return -std::numeric_limits<double>::infinity();
-      double mean = 0.0;
-      for (double x : g) mean += x;
-      mean /= n;
-      double ss = 0.0;
-      for (double& x : g) {
-        x -= mean;
-        ss += x * x;
-      }
-      if (std::sqrt(ss / n) < options_.min_contrast) continue;  // flat here: no information
-      const double scale = 1.0 / std::sqrt(ss);
-      for (size_t s = 0; s < n; ++s) sum_[s] += g[s] * scale;
-      ++used;
-    }
-    if (used < options_.min_images) return -std::numeric_limits<double>::infinity();
-    double norm2 = 0.0;
-    for (double x : sum_) norm2 += x * x;
-    // |sum z_i|^2 = K + sum_{i != j} z_i . z_j: the mean of the K (K - 1) pairwise NCCs.
-    return (norm2 - used) / (static_cast<double>(used) * (used - 1));
-  }
-
- private:
-  const std::vector<const LevelImage*>& images_;
-  const NormalSearchOptions& options_;
-  std::vector<double> sum_;
-  std::vector<double> g_;  // one image's grey values at the samples (reused per offset)
-};
-
-// Two unit vectors spanning the tangent plane of a unit normal (the patch's axes).
-std::pair<Eigen::Vector3d, Eigen::Vector3d> TangentBasis(const Eigen::Vector3d& normal) {
-  const Eigen::Vector3d t1 = normal.unitOrthogonal();
-  return {t1, normal.cross(t1)};
-}
 
 // Whether the image holds every sample the search can ask of it: the patch's corners at
 // both ends of the range and where the vertex is. An image that sees a vertex near its
@@ -121,17 +54,11 @@ struct Scan {
 Scan ScanAlong(const Eigen::Vector3d& p, const Eigen::Vector3d& direction, const std::vector<const LevelImage*>& images,
                double ground_pixel, const NormalSearchOptions& options) {
   Scan result;
-  const auto [t1, t2] = TangentBasis(direction);
-  const int h = options.patch_half;
-  std::vector<Eigen::Vector3d> patch;
-  for (int i = -h; i <= h; ++i) {
-    for (int j = -h; j <= h; ++j) {
-      patch.push_back(options.sample_pixels * ground_pixel * (i * t1 + j * t2));
-    }
-  }
+  const std::vector<Eigen::Vector3d> patch =
+      PatchOffsets(direction, options.patch_half, options.sample_pixels * ground_pixel);
   const int steps = static_cast<int>(std::floor(options.range_pixels / options.step_pixels));
   const double step = options.step_pixels * ground_pixel;
-  VertexSearch search(images, options);
+  PatchScorer search(images, options.min_contrast, options.min_images);
   std::vector<double> score(2 * steps + 1);
   std::vector<Eigen::Vector3d> samples(patch.size());
   for (int k = -steps; k <= steps; ++k) {
@@ -305,12 +232,11 @@ NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImag
     if (moves[v].norm() < least) continue;
     mesh->set_point(mesh->vertex_handle(static_cast<int>(v)), ToOpenMesh(points[v] + moves[v]));
   }
-  report.limited = LimitFoldingSteps(mesh, before);
-  const VertexMoves moved = MeasureVertexMoves(*mesh, before, least);
-  report.moved = moved.moved;
-  report.median_move = moved.median;
-  report.max_move = moved.max;
-  UpdateVertexNormals(mesh);
+  const GuardedStep step = GuardAndMeasureStep(mesh, before, least);
+  report.limited = step.limited;
+  report.moved = step.moves.moved;
+  report.median_move = step.moves.median;
+  report.max_move = step.moves.max;
   return report;
 }
 

@@ -239,6 +239,13 @@ std::string ReconstructionReport::Json() const {
                             {"limited", ns.limited},           {"median_move", ns.median_move},
                             {"max_move", ns.max_move}};
     }
+    const PlanePropagationReport& pp = level.plane_propagation;
+    if (pp.sources + pp.targets > 0) {
+      l["plane_propagation"] = {{"sources", pp.sources},       {"targets", pp.targets},
+                                {"hypotheses", pp.hypotheses}, {"moved", pp.moved},
+                                {"limited", pp.limited},       {"iterations", pp.iterations},
+                                {"median_move", pp.median_move}, {"max_move", pp.max_move}};
+    }
     l["break_off"] = level.break_off;
     l["vertices"] = level.vertices;
     l["faces"] = level.faces;
@@ -552,12 +559,26 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     const bool search_level = normal_search && level != coarsest && level >= options.normal_search_last_level;
     ImageStorage search_storage;
     std::vector<LevelImage> search_images;
+    PlanePropagationReport planes;  // of the last search_normals()
     auto search_normals = [&]() {
       if (search_images.empty()) search_images = store.Whole(level, &search_storage);
-      return SearchAlongNormals(&mesh, search_images, gsd0 * std::pow(2.0, level), options.normal_search_options);
+      NormalSearchReport ns =
+          SearchAlongNormals(&mesh, search_images, gsd0 * std::pow(2.0, level), options.normal_search_options);
+      if (options.plane_propagation) {
+        planes = PropagatePlanes(&mesh, search_images, gsd0 * std::pow(2.0, level), options.plane_propagation_options);
+        say("  level " + std::to_string(level) + " plane propagation: " + std::to_string(planes.sources) +
+            " vertices lend their plane, " + std::to_string(planes.targets) + " borrow; " +
+            std::to_string(planes.hypotheses) + " planes scored, " + std::to_string(planes.moved) +
+            " moved in " + std::to_string(planes.iterations) + " iterations (median " +
+            std::to_string(planes.median_move) + " m, max " + std::to_string(planes.max_move) + " m), " +
+            std::to_string(planes.limited) + " limited by the fold guard");
+        ns.moved += planes.moved;  // the rounds go on while either moved something
+      }
+      return ns;
     };
     if (search_level) {
       level_report.normal_search = search_normals();
+      level_report.plane_propagation = planes;
       const NormalSearchReport& ns = level_report.normal_search;
       say("  level " + std::to_string(level) + " normal search: " + std::to_string(ns.searched) +
           " vertices searched, " + std::to_string(ns.peaks) + " peaks" +

@@ -16,6 +16,7 @@
 #include "engine/adjustment_options.h"
 #include "engine/level_windows.h"
 #include "engine/normal_search.h"
+#include "engine/plane_propagation.h"
 #include "engine/pyramid.h"
 #include "engine/start_closed.h"
 #include "engine/start_tiepoints.h"
@@ -141,6 +142,11 @@ struct ReconstructionOptions {
   // 16.2 % of the area within 5 deg with 0.02; docs/EXPERIMENTS.md, session 11).
   double normal_search_tolerance = 0.0;
   NormalSearchOptions normal_search_options;
+  // After each normal search (before a level and in its rounds): vertices whose images
+  // disagree where they are try the planes of neighbours whose images agree, a ring
+  // further each iteration (engine/plane_propagation.h). Off by default.
+  bool plane_propagation = false;
+  PlanePropagationOptions plane_propagation_options;
   // After the finest level (its relaxation and untangling included): adjust it once more
   // from there, with Huber weights beyond polish_robust_k robust sigmas and rejection
   // beyond polish_reject_k (0: plain least squares). Negative: no such pass (default:
@@ -214,6 +220,7 @@ struct LevelReport {
   int fold_limited = 0;
   NormalSearchReport normal_search;  // ReconstructionOptions::normal_search
   int normal_search_rounds = 0;      // rounds kept (ReconstructionOptions::normal_search_rounds)
+  PlanePropagationReport plane_propagation;  // before the level (ReconstructionOptions::plane_propagation)
   int smoothed = 0;  // vertex moves of the tangential smoothing before the level
   int relaxed = 0;  // unseen vertices relaxed (ReconstructionOptions::relax_unseen), summed
   int hull_clamped = 0;     // vertices pulled inside the visual hull (ClosedStartOptions::hull_clamp)

@@ -26,12 +26,11 @@ ProjectionReport ProjectAlongNormals(TinMesh* mesh, const Tessellation& surface,
     const double offset = !in.hit || (out.hit && out.distance <= in.distance) ? out.distance : -in.distance;
     mesh->set_point(vh, ToOpenMesh(p + offset * normal));
   }
-  report.limited = LimitFoldingSteps(mesh, before);
-  const VertexMoves moved = MeasureVertexMoves(*mesh, before, 1e-9);
-  report.moved = moved.moved;
-  report.median_move = moved.median;
-  report.max_move = moved.max;
-  UpdateVertexNormals(mesh);
+  const GuardedStep step = GuardAndMeasureStep(mesh, before, 1e-9);
+  report.limited = step.limited;
+  report.moved = step.moves.moved;
+  report.median_move = step.moves.median;
+  report.max_move = step.moves.max;
   return report;
 }
 

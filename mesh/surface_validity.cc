@@ -199,4 +199,12 @@ UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds) {
   return report;
 }
 
+GuardedStep GuardAndMeasureStep(TinMesh* mesh, const std::vector<Eigen::Vector3d>& before, double least) {
+  GuardedStep step;
+  step.limited = LimitFoldingSteps(mesh, before);
+  step.moves = MeasureVertexMoves(*mesh, before, least);
+  UpdateVertexNormals(mesh);
+  return step;
+}
+
 }  // namespace facets

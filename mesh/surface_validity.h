@@ -37,6 +37,15 @@ struct VertexMoves {
 };
 VertexMoves MeasureVertexMoves(const TinMesh& mesh, const std::vector<Eigen::Vector3d>& before, double least);
 
+// The end of a step that moved vertices from `before` (one point per vertex): the fold
+// guard (LimitFoldingSteps), the moves of at least `least` (m) measured, and the vertex
+// normals updated. Shared by the searches between levels and the V-cycle's projection.
+struct GuardedStep {
+  int limited = 0;  // vertices whose steps the fold guard halved or undid
+  VertexMoves moves;
+};
+GuardedStep GuardAndMeasureStep(TinMesh* mesh, const std::vector<Eigen::Vector3d>& before, double least);
+
 // Repair of crossings the per-window fold guard cannot see (between windows, after
 // splits): the vertices of crossing triangles, and from round 2 on their rings grown by
 // one per round, move halfway to the mean of their neighbours (three Jacobi sweeps per
