@@ -92,7 +92,8 @@ struct ReconstructArgs {
   int normal_search_last_level = ReconstructionOptions().normal_search_last_level;
   bool normal_search_support = false;
   bool normal_search_corners = false;
-  bool plane_propagation = false;
+  bool plane_propagation_on = false;
+  bool plane_propagation_off = false;
   int plane_iterations = PlanePropagationOptions().iterations;
   double plane_source_score = PlanePropagationOptions().source_score;
   double plane_max_move = PlanePropagationOptions().max_move_pixels;
@@ -222,7 +223,8 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.normal_search_last_level = args.normal_search_last_level;
   options.normal_search_options.support_filter = args.normal_search_support;
   options.normal_search_options.corners = args.normal_search_corners;
-  options.plane_propagation = args.plane_propagation;
+  if (args.plane_propagation_on) options.plane_propagation = true;
+  if (args.plane_propagation_off) options.plane_propagation = false;
   options.plane_propagation_options.iterations = args.plane_iterations;
   options.plane_propagation_options.source_score = args.plane_source_score;
   options.plane_propagation_options.max_move_pixels = args.plane_max_move;
@@ -463,9 +465,11 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_flag("--normal-search-corners", args->normal_search_corners,
                 "normal search: vertices on ramps (normal 20-70 deg from vertical: a rounded foot or eave) also try "
                 "a wall through them (moving horizontally) and a roof or ground (moving vertically)");
-  sub->add_flag("--plane-propagation", args->plane_propagation,
-                "after each normal search: vertices whose images disagree where they are try the planes of "
-                "neighbours whose images agree (PatchMatch-like, a ring further per iteration)");
+  sub->add_flag("--plane-propagation", args->plane_propagation_on,
+                "after each normal search: vertices try the planes of neighbours whose images agree there "
+                "(PatchMatch-like, a ring further per iteration; default: on wherever the normal search runs)");
+  sub->add_flag("--no-plane-propagation", args->plane_propagation_off, "no plane propagation")
+      ->excludes("--plane-propagation");
   sub->add_option("--plane-iterations", args->plane_iterations, "plane propagation: iterations")
       ->capture_default_str()
       ->check(CLI::Range(1, 50));
