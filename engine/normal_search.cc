@@ -232,11 +232,7 @@ NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImag
     if (moves[v].norm() < least) continue;
     mesh->set_point(mesh->vertex_handle(static_cast<int>(v)), ToOpenMesh(points[v] + moves[v]));
   }
-  const GuardedStep step = GuardAndMeasureStep(mesh, before, least);
-  report.limited = step.limited;
-  report.moved = step.moves.moved;
-  report.median_move = step.moves.median;
-  report.max_move = step.moves.max;
+  CopyStepFields(GuardAndMeasureStep(mesh, before, least), &report);
   return report;
 }
 

@@ -34,17 +34,20 @@ class PlaneScorer {
               const PlanePropagationOptions& options)
       : scene_(scene), images_(images), centres_(centres), options_(options),
         spacing_(options.sample_pixels * ground_pixel),
-        patch_radius_(options.patch_half * options.sample_pixels * ground_pixel) {}
+        patch_radius_(options.patch_half * options.sample_pixels * ground_pixel),
+        scorer_(seeing_, options.min_contrast, options.min_images) {}
+  PlaneScorer(const PlaneScorer&) = delete;  // scorer_ refers to seeing_
+  PlaneScorer& operator=(const PlaneScorer&) = delete;
 
   // Mean pairwise NCC of a patch at `p` in the plane normal to `normal`, over the images
   // that see that plane from its front and whose rays to `p` are free up to `slack` (m)
   // before it (the surface a vertex leaves may stand in its way).
   double Score(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, double slack) {
     FindSeeing(p, normal, slack);
-    const std::vector<Eigen::Vector3d> offsets = PatchOffsets(normal, options_.patch_half, spacing_);
-    samples_.resize(offsets.size());
-    for (size_t s = 0; s < offsets.size(); ++s) samples_[s] = p + offsets[s];
-    return ScoreSamples();
+    if (static_cast<int>(seeing_.size()) < options_.min_images) return -std::numeric_limits<double>::infinity();
+    samples_ = PatchOffsets(normal, options_.patch_half, spacing_);
+    for (Eigen::Vector3d& sample : samples_) sample += p;
+    return scorer_.Score(samples_);
   }
 
  private:
@@ -63,12 +66,6 @@ class PlaneScorer {
     }
   }
 
-  double ScoreSamples() {
-    if (static_cast<int>(seeing_.size()) < options_.min_images) return -std::numeric_limits<double>::infinity();
-    PatchScorer scorer(seeing_, options_.min_contrast, options_.min_images);
-    return scorer.Score(samples_);
-  }
-
   const TriangleScene& scene_;
   const std::vector<LevelImage>& images_;
   const std::vector<Eigen::Vector3d>& centres_;
@@ -77,6 +74,7 @@ class PlaneScorer {
   double patch_radius_;
   std::vector<const LevelImage*> seeing_;
   std::vector<Eigen::Vector3d> samples_;
+  PatchScorer scorer_;  // over seeing_
 };
 
 // Planes alike enough that scoring both is wasted: normals within ~8 deg and the
@@ -110,14 +108,13 @@ PlanePropagationReport PropagatePlanes(TinMesh* mesh, const std::vector<LevelIma
       state[v].score = scorer.Score(points[v], state[v].normal, 0.0);
     }
   });
-  for (size_t v = 0; v < n; ++v) {
-    report.sources += state[v].score >= options.source_score;
-  }
   const double max_target_nz = std::cos(options.min_target_tilt_deg * M_PI / 180.0);
   std::vector<char> target(n, 0);
   for (size_t v = 0; v < n; ++v) {
+    report.sources += state[v].score >= options.source_score;
     target[v] = !mesh->is_boundary(mesh->vertex_handle(static_cast<int>(v))) &&
                 std::abs(state[v].normal.z()) <= max_target_nz + 1e-12;
+    report.targets += target[v];
   }
   std::vector<char> moved(n, 0);
   std::vector<int> tried(n, 0);
@@ -135,7 +132,6 @@ PlanePropagationReport PropagatePlanes(TinMesh* mesh, const std::vector<LevelIma
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 32), [&](const tbb::blocked_range<size_t>& r) {
       PlaneScorer scorer(scene, images, centres, ground_pixel, options);
       std::vector<Plane> planes;
-      std::vector<int> ring;
       for (size_t v = r.begin(); v != r.end(); ++v) {
         const auto vh = mesh->vertex_handle(static_cast<int>(v));
         if (!target[v] || !look[v]) continue;
@@ -151,11 +147,10 @@ PlanePropagationReport PropagatePlanes(TinMesh* mesh, const std::vector<LevelIma
         };
         // The tangent planes of the neighbours that lend theirs, and the planes of the
         // faces around the vertex's neighbours whose three corners all lend.
-        ring.clear();
-        for (auto w : mesh->vv_range(vh)) ring.push_back(w.idx());
-        for (int w : ring) {
+        for (auto wh : mesh->vv_range(vh)) {
+          const int w = wh.idx();
           if (lends(w)) add({state[w].position, state[w].normal});
-          for (auto f : mesh->vf_range(mesh->vertex_handle(w))) {
+          for (auto f : mesh->vf_range(wh)) {
             Eigen::Vector3d corner[3];
             int k = 0;
             bool all = true;
@@ -197,17 +192,9 @@ PlanePropagationReport PropagatePlanes(TinMesh* mesh, const std::vector<LevelIma
   }
   for (size_t v = 0; v < n; ++v) {
     report.hypotheses += tried[v];
-    report.targets += target[v];
-  }
-  const double least = 0.05 * ground_pixel;
-  for (size_t v = 0; v < n; ++v) {
     if (moved[v]) mesh->set_point(mesh->vertex_handle(static_cast<int>(v)), ToOpenMesh(state[v].position));
   }
-  const GuardedStep step = GuardAndMeasureStep(mesh, points, least);
-  report.limited = step.limited;
-  report.moved = step.moves.moved;
-  report.median_move = step.moves.median;
-  report.max_move = step.moves.max;
+  CopyStepFields(GuardAndMeasureStep(mesh, points, 0.05 * ground_pixel), &report);
   return report;
 }
 

@@ -26,11 +26,7 @@ ProjectionReport ProjectAlongNormals(TinMesh* mesh, const Tessellation& surface,
     const double offset = !in.hit || (out.hit && out.distance <= in.distance) ? out.distance : -in.distance;
     mesh->set_point(vh, ToOpenMesh(p + offset * normal));
   }
-  const GuardedStep step = GuardAndMeasureStep(mesh, before, 1e-9);
-  report.limited = step.limited;
-  report.moved = step.moves.moved;
-  report.median_move = step.moves.median;
-  report.max_move = step.moves.max;
+  CopyStepFields(GuardAndMeasureStep(mesh, before, 1e-9), &report);
   return report;
 }
 

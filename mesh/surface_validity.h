@@ -46,6 +46,15 @@ struct GuardedStep {
 };
 GuardedStep GuardAndMeasureStep(TinMesh* mesh, const std::vector<Eigen::Vector3d>& before, double least);
 
+// Into a step's report (any struct with limited, moved, median_move, max_move).
+template <class Report>
+void CopyStepFields(const GuardedStep& step, Report* report) {
+  report->limited = step.limited;
+  report->moved = step.moves.moved;
+  report->median_move = step.moves.median;
+  report->max_move = step.moves.max;
+}
+
 // Repair of crossings the per-window fold guard cannot see (between windows, after
 // splits): the vertices of crossing triangles, and from round 2 on their rings grown by
 // one per round, move halfway to the mean of their neighbours (three Jacobi sweeps per
