@@ -106,6 +106,8 @@ struct ReconstructArgs {
   int normal_search_rounds = ReconstructionOptions().normal_search_rounds;
   int normal_search_rounds_last_level = ReconstructionOptions().normal_search_rounds_last_level;
   double normal_search_tolerance = ReconstructionOptions().normal_search_tolerance;
+  int normal_search_local_rings = ReconstructionOptions().normal_search_local_rings;
+  int v_cycle_rounds_last_level = ReconstructionOptions().v_cycle_rounds_last_level;
   double normal_search_min_cos = NormalSearchOptions().min_cos;
   double normal_search_max_here = NormalSearchOptions().max_score_here;
   double normal_search_min_angle = NormalSearchOptions().min_angle_to_views_deg;
@@ -238,6 +240,8 @@ void RunReconstruct(const ReconstructArgs& args) {
   if (args.polish) options.polish_robust_k = *args.polish;
   options.normal_search_rounds_last_level = args.normal_search_rounds_last_level;
   options.normal_search_tolerance = args.normal_search_tolerance;
+  options.normal_search_local_rings = args.normal_search_local_rings;
+  options.v_cycle_rounds_last_level = args.v_cycle_rounds_last_level;
   options.normal_search_options.min_cos = args.normal_search_min_cos;
   options.normal_search_options.max_score_here = args.normal_search_max_here;
   options.normal_search_options.min_angle_to_views_deg = args.normal_search_min_angle;
@@ -457,6 +461,11 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--v-cycle-level", args->v_cycle_level, "v-cycles: the pyramid level to go back up to")
       ->capture_default_str()
       ->check(CLI::Range(1, 20));
+  sub->add_option("--v-cycle-rounds-last-level", args->v_cycle_rounds_last_level,
+                  "v-cycles: finest pyramid level with normal search rounds in the cycles (-1 = as "
+                  "--normal-search-rounds-last-level)")
+      ->capture_default_str()
+      ->check(CLI::Range(-1, 20));
   sub->add_option("--v-cycle-robust", args->v_cycle_robust,
                   "v-cycles: Huber weights beyond K robust sigmas and rejection beyond 5 on their levels (0 = plain "
                   "least squares)")
@@ -523,6 +532,11 @@ void AddReconstructCommand(CLI::App& app) {
                   "when it drops)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
+  sub->add_option("--normal-search-local-rings", args->normal_search_local_rings,
+                  "normal search: rounds re-adjust only windows over the faces within this many edge rings of "
+                  "the vertices that moved, judged by those windows' sigma0 (-1 = the whole level)")
+      ->capture_default_str()
+      ->check(CLI::Range(-1, 50));
   sub->add_option("--normal-search-min-angle", args->normal_search_min_angle,
                   "normal search: only vertices whose normal turns more than this (deg) from the mean direction to "
                   "the images that see them (0 = all; 45: walls of an aerial block)")

@@ -102,7 +102,8 @@ void LevelWindowOptions::Check() const {
 LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const std::vector<LevelImage>& images,
                                      const AdjustmentOptions& adjustment,
                                      const LevelWindowOptions& options, bool keep_grey,
-                                     const std::function<void(const std::string&)>& progress) {
+                                     const std::function<void(const std::string&)>& progress,
+                                     const LocalScope* local) {
   const WindowImages seeing = [&](const Eigen::AlignedBox3d& box, ImageStorage*) {
     std::vector<LevelImage> list;
     for (const LevelImage& image : images) {
@@ -110,14 +111,18 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const std::vector<LevelImage
     }
     return list;
   };
-  return AdjustLevelInWindows(mesh, seeing, adjustment, options, keep_grey, progress);
+  return AdjustLevelInWindows(mesh, seeing, adjustment, options, keep_grey, progress, local);
 }
 
 LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
                                      const AdjustmentOptions& adjustment,
                                      const LevelWindowOptions& options, bool keep_grey,
-                                     const std::function<void(const std::string&)>& progress) {
+                                     const std::function<void(const std::string&)>& progress,
+                                     const LocalScope* local) {
   options.Check();
+  if (local && (!local->previous || local->previous->summary.vertex_sigma.size() != mesh->n_vertices())) {
+    throw std::invalid_argument("local re-adjustment: needs the level's previous adjustment of the same mesh");
+  }
   const auto start = std::chrono::steady_clock::now();
   std::mutex say_mutex;
   auto say = [&](const std::string& line) {
@@ -125,11 +130,15 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
     if (progress) progress(line);
   };
   LevelAdjustment level;
-  const std::vector<MeshWindow> windows = PartitionIntoWindows(*mesh, options.partition);
+  const std::vector<MeshWindow> windows = local ? local->windows : PartitionIntoWindows(*mesh, options.partition);
+  if (windows.empty()) throw std::runtime_error("no window to adjust");
   const std::vector<std::vector<int>> groups = IndependentWindowGroups(*mesh, windows);
   level.groups = static_cast<int>(groups.size());
   for (const auto& w : windows) level.window_core_faces.push_back(static_cast<int>(w.core_faces.size()));
-  const bool many = windows.size() > 1;
+  // A local run has surface outside its windows: occluders and fixed margins as with many.
+  const bool many = windows.size() > 1 || local;
+  // Its neighbours are adjusted already: margins held from the first sweep on.
+  const int free_margin_sweeps = local ? 0 : options.free_margin_sweeps;
   std::vector<int> face_window(mesh->n_faces(), -1);
   for (size_t w = 0; w < windows.size(); ++w) {
     for (int f : windows[w].core_faces) face_window[f] = static_cast<int>(w);
@@ -188,7 +197,7 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
         try {
           if (seeing.empty()) throw std::runtime_error("no image sees the window");
           const std::vector<bool> fixed =
-              sweep < options.free_margin_sweeps ? std::vector<bool>(wm.fixed.size(), false) : wm.fixed;
+              sweep < free_margin_sweeps ? std::vector<bool>(wm.fixed.size(), false) : wm.fixed;
           std::vector<bool> judged(wm.fixed.size(), !many);
           for (int local : wm.owned_local) judged[local] = true;
           // Per-vertex sigma is taken from the last sweep only: earlier sweeps skip the
@@ -250,9 +259,15 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
   // Summary and per-vertex values.
   WindowReport& s = level.summary;
   s.converged = true;
-  s.vertex_sigma.assign(num_vertices, 0.0);
-  s.vertex_views.assign(num_vertices, 0);
-  s.vertex_flags.assign(num_vertices, kVertexFewViews);
+  if (local) {
+    s.vertex_sigma = local->previous->summary.vertex_sigma;
+    s.vertex_views = local->previous->summary.vertex_views;
+    s.vertex_flags = local->previous->summary.vertex_flags;
+  } else {
+    s.vertex_sigma.assign(num_vertices, 0.0);
+    s.vertex_views.assign(num_vertices, 0);
+    s.vertex_flags.assign(num_vertices, kVertexFewViews);
+  }
   s.precision_computed = true;
   s.variance_factor = 0.0;  // pooled below
   double pooled = 0.0;
@@ -308,7 +323,7 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
   } else {
     s.variance_factor = 1.0;
   }
-  s.radiometry = windows.size() == 1 ? results.front().report.radiometry
+  s.radiometry = windows.size() == 1 && !local ? results.front().report.radiometry
                                      : std::vector<std::vector<std::array<double, 2>>>{};
 
   if (keep_grey) {
@@ -329,6 +344,27 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
             for (int c = 0; c < channels; ++c) {
               level.grey[static_cast<size_t>(to[corner]) * channels + c] =
                   result.grey[static_cast<size_t>(from[corner]) * channels + c];
+            }
+          }
+        }
+      }
+    }
+    // Faces outside a local run's cores: the grey values of the previous adjustment
+    // (same faces, same sub-triangles) where no local window set them.
+    const LevelAdjustment* previous = local ? local->previous : nullptr;
+    if (previous && previous->tessellation.triangles.size() == level.tessellation.triangles.size() &&
+        !previous->grey.empty()) {
+      const int previous_channels =
+          static_cast<int>(previous->grey.size() / std::max<size_t>(1, previous->tessellation.points.size()));
+      for (size_t f = 0; f < face_window.size() && previous_channels == channels; ++f) {
+        if (face_window[f] >= 0) continue;
+        for (int k = 0; k < kSubTrianglesPerFace; ++k) {
+          const Eigen::Vector3i& to = level.tessellation.triangles[f * kSubTrianglesPerFace + k];
+          const Eigen::Vector3i& from = previous->tessellation.triangles[f * kSubTrianglesPerFace + k];
+          for (int corner = 0; corner < 3; ++corner) {
+            for (int c = 0; c < channels; ++c) {
+              double& grey = level.grey[static_cast<size_t>(to[corner]) * channels + c];
+              if (!std::isfinite(grey)) grey = previous->grey[static_cast<size_t>(from[corner]) * channels + c];
             }
           }
         }

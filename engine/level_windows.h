@@ -61,10 +61,22 @@ struct LevelAdjustment {
 using WindowImages = std::function<std::vector<LevelImage>(const Eigen::AlignedBox3d& box,
                                                            ImageStorage* storage)>;
 
+// A local re-adjustment: after a search moved some vertices of an adjusted level, only
+// windows around them run again (PartitionFacesIntoWindows, mesh/windows.h); their
+// margins are held at the level's values from the first sweep on. The summary's counts
+// and sigma0 are then those of these windows only; per-vertex values and grey values
+// (keep_grey) of the rest of the level come from `previous` (the level's adjustment
+// before, same topology).
+struct LocalScope {
+  std::vector<MeshWindow> windows;
+  const LevelAdjustment* previous = nullptr;
+};
+
 LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
                                      const AdjustmentOptions& adjustment,
                                      const LevelWindowOptions& options, bool keep_grey,
-                                     const std::function<void(const std::string&)>& progress);
+                                     const std::function<void(const std::string&)>& progress,
+                                     const LocalScope* local = nullptr);
 
 // Same with whole images in memory.
 // Adjusts *mesh (vertex normals set) in place. progress gets one line per window.
@@ -72,6 +84,7 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
 LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const std::vector<LevelImage>& images,
                                      const AdjustmentOptions& adjustment,
                                      const LevelWindowOptions& options, bool keep_grey,
-                                     const std::function<void(const std::string&)>& progress);
+                                     const std::function<void(const std::string&)>& progress,
+                                     const LocalScope* local = nullptr);
 
 }  // namespace facets

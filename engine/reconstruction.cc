@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "engine/local_readjustment.h"
 #include "engine/hidden_vertices.h"
 #include "engine/start_fitted_plane.h"
 #include "mesh/creases.h"
@@ -175,6 +176,8 @@ void ReconstructionOptions::Check() const {
   if (tangential_smoothing < 0 || tangential_smoothing > 10) fail("tangential_smoothing must lie in 0..10");
   if (straighten_rounds < 0 || straighten_rounds > 10) fail("straighten_rounds must lie in 0..10");
   if (v_cycles < 0 || v_cycles > 10) fail("v_cycles must lie in 0..10");
+  if (normal_search_local_rings < -1) fail("normal_search_local_rings must be >= -1");
+  if (v_cycle_rounds_last_level < -1) fail("v_cycle_rounds_last_level must be >= -1");
   if (v_cycles > 0 && v_cycle_level < 1) fail("v_cycle_level must be >= 1 (a level above the finest)");
   if (!(v_cycle_robust_k >= 0.0)) fail("v_cycle_robust_k must be >= 0");
   if (v_cycle_robust_k > 0.0 && !(v_cycle_reject_k > v_cycle_robust_k)) fail("v_cycle_reject_k must exceed v_cycle_robust_k");
@@ -223,6 +226,7 @@ std::string ReconstructionReport::Json() const {
     l["edge_length"] = level.edge_length;
     l["smoothed"] = level.smoothed;
     l["normal_search_rounds"] = level.normal_search_rounds;
+    if (level.normal_search_local_windows > 0) l["normal_search_local_windows"] = level.normal_search_local_windows;
     if (level.cycle > 0) {
       l["cycle"] = level.cycle;
       const ProjectionReport& p = level.projection;
@@ -648,18 +652,41 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     }
     // Walls the adjustment left beyond its pull-in: search along the normals again and
     // adjust again, kept only when the level then fits better.
+    const int rounds_last_level = cycle > 0 && options.v_cycle_rounds_last_level >= 0
+                                      ? options.v_cycle_rounds_last_level
+                                      : options.normal_search_rounds_last_level;
     for (int round = 0;
-         search_level && round < options.normal_search_rounds && level >= options.normal_search_rounds_last_level;
+         search_level && round < options.normal_search_rounds && level >= rounds_last_level;
          ++round) {
       TinMesh before = mesh;
       const NormalSearchReport ns = search_normals();
       if (ns.moved == 0) break;
-      LevelAdjustment again = AdjustLevelInWindows(&mesh, window_images(level), level_options(level),
-                                                   options.windows, level == finest, options.progress);
-      const bool better = again.summary.sigma0 < adjusted.summary.sigma0 * (1.0 + options.normal_search_tolerance);
+      LevelAdjustment again;
+      // The round is judged on these (the whole level's, or the local windows').
+      double was_sigma0 = adjusted.summary.sigma0;
+      double now_sigma0 = 0.0;
+      int local_windows = 0;
+      std::string scope_note;
+      if (options.normal_search_local_rings >= 0) {
+        LocalReadjustment local =
+            ReadjustAroundMovedVertices(&mesh, before, adjusted, options.normal_search_local_rings,
+                                        window_images(level), level_options(level), options.windows,
+                                        level == finest, options.progress);
+        if (local.windows == 0) break;
+        again = std::move(local.level);
+        was_sigma0 = local.sigma0_before;
+        now_sigma0 = local.sigma0_after;
+        local_windows = local.windows;
+        scope_note = " (" + std::to_string(local_windows) + " local windows)";
+      } else {
+        again = AdjustLevelInWindows(&mesh, window_images(level), level_options(level), options.windows,
+                                     level == finest, options.progress);
+        now_sigma0 = again.summary.sigma0;
+      }
+      const bool better = now_sigma0 < was_sigma0 * (1.0 + options.normal_search_tolerance);
       say("  level " + std::to_string(level) + " normal search round " + std::to_string(round + 1) + ": " +
           std::to_string(ns.moved) + " moved (median " + std::to_string(ns.median_move) + " m); sigma0 " +
-          std::to_string(again.summary.sigma0) + " against " + std::to_string(adjusted.summary.sigma0) +
+          std::to_string(now_sigma0) + " against " + std::to_string(was_sigma0) + scope_note +
           (better ? ", kept" : ", dropped"));
       if (!better) {
         mesh = std::move(before);
@@ -667,6 +694,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       }
       adjusted = std::move(again);
       ++level_report.normal_search_rounds;
+      level_report.normal_search_local_windows += local_windows;
     }
     // A crease skew to the grid (a zigzag of edges): its vertex chains go onto the
     // crease's line and the level runs again, kept only when it fits better; up to

@@ -141,6 +141,11 @@ struct ReconstructionOptions {
   // rounds kept on every level; not the default: the real Boruszyn walls lose (22.9 ->
   // 16.2 % of the area within 5 deg with 0.02; docs/EXPERIMENTS.md, session 11).
   double normal_search_tolerance = 0.0;
+  // Rounds re-adjust only the windows over the faces within this many edge rings of the
+  // vertices the search and the propagation moved (LocalScope, engine/level_windows.h);
+  // the round is then judged by those windows' sigma0 before (one linearisation of the
+  // surface before the search) and after. Negative: the whole level again.
+  int normal_search_local_rings = -1;
   NormalSearchOptions normal_search_options;
   // After each normal search (before a level and in its rounds; so not for closed and
   // facade starts): vertices try the planes of neighbours whose images agree there, a
@@ -169,6 +174,10 @@ struct ReconstructionOptions {
   int v_cycle_level = 1;
   double v_cycle_robust_k = 2.0;
   double v_cycle_reject_k = 5.0;
+  // The V-cycles' passes run the normal search's rounds on this level and coarser
+  // (negative: normal_search_rounds_last_level, as the descent). With 0 and the
+  // descent's default the finest level's rounds run once, in the cycle.
+  int v_cycle_rounds_last_level = -1;
   // Called with one line of progress at a time (stage, level, iteration, sigma0).
   std::function<void(const std::string&)> progress;
   // Called with each level's TIN once the level is finished (e.g. to keep it for a look
@@ -223,6 +232,9 @@ struct LevelReport {
   int fold_limited = 0;
   NormalSearchReport normal_search;  // ReconstructionOptions::normal_search
   int normal_search_rounds = 0;      // rounds kept (ReconstructionOptions::normal_search_rounds)
+  // ReconstructionOptions::normal_search_local_rings: windows re-adjusted by the rounds
+  // kept, summed (0 when the rounds re-adjust the whole level).
+  int normal_search_local_windows = 0;
   PlanePropagationReport plane_propagation;  // before the level (ReconstructionOptions::plane_propagation)
   int smoothed = 0;  // vertex moves of the tangential smoothing before the level
   int relaxed = 0;  // unseen vertices relaxed (ReconstructionOptions::relax_unseen), summed

@@ -83,18 +83,24 @@ void WindowPartitionOptions::Check() const {
 
 std::vector<MeshWindow> PartitionIntoWindows(const TinMesh& mesh,
                                              const WindowPartitionOptions& options) {
+  std::vector<int> all(mesh.n_faces());
+  std::iota(all.begin(), all.end(), 0);
+  return PartitionFacesIntoWindows(mesh, std::move(all), options);
+}
+
+std::vector<MeshWindow> PartitionFacesIntoWindows(const TinMesh& mesh, std::vector<int> faces,
+                                                  const WindowPartitionOptions& options) {
   options.Check();
   const int num_faces = static_cast<int>(mesh.n_faces());
   std::vector<Eigen::Vector3d> centres(num_faces, Eigen::Vector3d::Zero());
-  for (auto fh : mesh.faces()) {
-    for (auto vh : mesh.fv_range(fh)) centres[fh.idx()] += ToEigen(mesh.point(vh)) / 3.0;
+  for (int f : faces) {
+    if (f < 0 || f >= num_faces) throw std::invalid_argument("windows: face index out of range");
+    for (auto vh : mesh.fv_range(mesh.face_handle(f))) centres[f] += ToEigen(mesh.point(vh)) / 3.0;
   }
+  std::sort(faces.begin(), faces.end());
+  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
   std::vector<std::vector<int>> leaves;
-  if (num_faces > 0) {
-    std::vector<int> all(num_faces);
-    std::iota(all.begin(), all.end(), 0);
-    SplitFaces(centres, std::move(all), options.max_faces, &leaves);
-  }
+  if (!faces.empty()) SplitFaces(centres, std::move(faces), options.max_faces, &leaves);
   std::vector<int> face_window(num_faces, -1);
   std::vector<MeshWindow> windows(leaves.size());
   for (size_t w = 0; w < leaves.size(); ++w) {
@@ -102,15 +108,39 @@ std::vector<MeshWindow> PartitionIntoWindows(const TinMesh& mesh,
     windows[w].core_faces = std::move(leaves[w]);
     windows[w].faces = GrowWindow(mesh, windows[w].core_faces, options.margin_rings);
   }
-  // Owner of a vertex: the window of its lowest-index face.
+  // Owner of a vertex: the window of its lowest-index face among the partitioned ones
+  // (vertices with none stay unowned).
   for (auto vh : mesh.vertices()) {
     int lowest = -1;
     for (auto fh : mesh.vf_range(vh)) {
-      if (lowest < 0 || fh.idx() < lowest) lowest = fh.idx();
+      if (face_window[fh.idx()] >= 0 && (lowest < 0 || fh.idx() < lowest)) lowest = fh.idx();
     }
     if (lowest >= 0) windows[face_window[lowest]].owned_vertices.push_back(vh.idx());
   }
   return windows;
+}
+
+std::vector<int> FacesNearVertices(const TinMesh& mesh, const std::vector<char>& seeds, int rings) {
+  if (seeds.size() != mesh.n_vertices()) throw std::invalid_argument("windows: one seed flag per vertex");
+  std::vector<char> near = seeds;
+  for (int ring = 0; ring < rings; ++ring) {
+    std::vector<char> grown = near;
+    for (auto vh : mesh.vertices()) {
+      if (!near[vh.idx()]) continue;
+      for (auto nh : mesh.vv_range(vh)) grown[nh.idx()] = 1;
+    }
+    near = std::move(grown);
+  }
+  std::vector<int> faces;
+  for (auto fh : mesh.faces()) {
+    for (auto vh : mesh.fv_range(fh)) {
+      if (near[vh.idx()]) {
+        faces.push_back(fh.idx());
+        break;
+      }
+    }
+  }
+  return faces;
 }
 
 std::vector<std::vector<int>> IndependentWindowGroups(const TinMesh& mesh,

@@ -37,6 +37,16 @@ struct MeshWindow {
 std::vector<MeshWindow> PartitionIntoWindows(const TinMesh& mesh,
                                              const WindowPartitionOptions& options);
 
+// Same over a subset of the faces (a local re-adjustment around vertices that moved):
+// only those faces are cores; margins grow into the rest of the mesh; a vertex belongs
+// to the window of its lowest-index face in the subset, vertices without one to none.
+std::vector<MeshWindow> PartitionFacesIntoWindows(const TinMesh& mesh, std::vector<int> faces,
+                                                  const WindowPartitionOptions& options);
+
+// Faces with a corner within `rings` edge rings of a vertex marked in `seeds` (0: the
+// faces around the marked vertices): what a local re-adjustment covers.
+std::vector<int> FacesNearVertices(const TinMesh& mesh, const std::vector<char>& seeds, int rings);
+
 // Groups of windows that share no vertex (not even fixed margin vertices): the windows
 // of one group read and write disjoint parts of the mesh and may run in parallel;
 // groups run one after the other. Greedy colouring in window order; deterministic.
