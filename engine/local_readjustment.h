@@ -2,8 +2,8 @@
 // ReconstructionOptions::normal_search_local_rings): after a search moved some vertices
 // of an adjusted level, only the windows over the faces within a few edge rings of them
 // run again (LocalScope, engine/level_windows.h), and the round is judged by those
-// windows' sigma0 before and after it. On the rendered block's level 0 a round then costs
-// about 20 s instead of 35 s (docs/EXPERIMENTS.md, session 15).
+// windows' sigma0 before and after it (one linearisation each). On the rendered block's
+// level 0 a round then costs about 20 s instead of 35 s (docs/EXPERIMENTS.md, session 15).
 #pragma once
 
 #include <functional>
@@ -18,10 +18,13 @@ struct LocalReadjustment {
   // The level's adjustment with the local windows' results in: surface, per-vertex and
   // grey values; its summary's sigma0, observations and redundancy pooled with the local
   // windows' share replaced (margins counted in every window that holds them, as in the
-  // level's own pooling); per-window reports those of `adjusted`.
+  // level's own pooling; their converged sigma0 before estimated from the one after and
+  // the two probes); per-window reports those of `adjusted`.
   LevelAdjustment level;
-  double sigma0_before = 0.0;  // of the local windows on `before` (one linearisation)
-  double sigma0_after = 0.0;   // of the local windows after their adjustment
+  // Of the local windows, each from one linearisation of a copy: on `before`, and on the
+  // surface their adjustment left.
+  double sigma0_before = 0.0;
+  double sigma0_after = 0.0;
   int windows = 0;             // 0: no vertex moved, nothing done
 };
 

@@ -143,8 +143,9 @@ struct ReconstructionOptions {
   double normal_search_tolerance = 0.0;
   // Rounds re-adjust only the windows over the faces within this many edge rings of the
   // vertices the search and the propagation moved (LocalScope, engine/level_windows.h);
-  // the round is then judged by those windows' sigma0 before (one linearisation of the
-  // surface before the search) and after. Negative: the whole level again.
+  // the round is then judged by those windows' sigma0 before and after (one linearisation
+  // each, of the surface before the search and of the one the round left). Negative: the
+  // whole level again.
   int normal_search_local_rings = -1;
   NormalSearchOptions normal_search_options;
   // After each normal search (before a level and in its rounds; so not for closed and
