@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "mesh/windows.h"
@@ -49,7 +50,7 @@ LocalReadjustment ReadjustAroundMovedVertices(TinMesh* mesh, const TinMesh& befo
   // The level's summary: the local windows' share replaced, their converged sigma0 before
   // taken as the one after scaled by the probes' ratio.
   const WindowReport& full = adjusted.summary;
-  const WindowReport& now = result.level.summary;
+  WindowReport& now = result.level.summary;
   const double ratio = after.sigma0 > 0.0 ? was.sigma0 / after.sigma0 : 1.0;
   const double share_before = now.sigma0 * ratio * now.sigma0 * ratio * static_cast<double>(was.redundancy);
   const double redundancy = static_cast<double>(full.redundancy - was.redundancy + now.redundancy);
@@ -59,9 +60,9 @@ LocalReadjustment ReadjustAroundMovedVertices(TinMesh* mesh, const TinMesh& befo
   merged.sigma0 = redundancy > 0 && pooled > 0 ? std::sqrt(pooled / redundancy) : now.sigma0;
   merged.redundancy = static_cast<long long>(redundancy);
   merged.observations = full.observations - was.observations + now.observations;
-  merged.vertex_sigma = now.vertex_sigma;
-  merged.vertex_views = now.vertex_views;
-  merged.vertex_flags = now.vertex_flags;
+  merged.vertex_sigma = std::move(now.vertex_sigma);
+  merged.vertex_views = std::move(now.vertex_views);
+  merged.vertex_flags = std::move(now.vertex_flags);
   result.level.summary = std::move(merged);
   result.level.windows = adjusted.windows;
   result.level.window_core_faces = adjusted.window_core_faces;

@@ -12,8 +12,8 @@
 #include <stdexcept>
 #include <unordered_map>
 
-#include "engine/local_readjustment.h"
 #include "engine/hidden_vertices.h"
+#include "engine/local_readjustment.h"
 #include "engine/start_fitted_plane.h"
 #include "mesh/creases.h"
 #include "mesh/local_ops.h"
@@ -665,8 +665,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       // The round is judged on these (the whole level's, or the local windows').
       double was_sigma0 = adjusted.summary.sigma0;
       double now_sigma0 = 0.0;
-      int local_windows = 0;
-      std::string scope_note;
+      int local_windows = 0;  // 0: the whole level was adjusted again
       if (options.normal_search_local_rings >= 0) {
         LocalReadjustment local =
             ReadjustAroundMovedVertices(&mesh, before, adjusted, options.normal_search_local_rings,
@@ -677,7 +676,6 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
         was_sigma0 = local.sigma0_before;
         now_sigma0 = local.sigma0_after;
         local_windows = local.windows;
-        scope_note = " (" + std::to_string(local_windows) + " local windows)";
       } else {
         again = AdjustLevelInWindows(&mesh, window_images(level), level_options(level), options.windows,
                                      level == finest, options.progress);
@@ -686,7 +684,8 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       const bool better = now_sigma0 < was_sigma0 * (1.0 + options.normal_search_tolerance);
       say("  level " + std::to_string(level) + " normal search round " + std::to_string(round + 1) + ": " +
           std::to_string(ns.moved) + " moved (median " + std::to_string(ns.median_move) + " m); sigma0 " +
-          std::to_string(now_sigma0) + " against " + std::to_string(was_sigma0) + scope_note +
+          std::to_string(now_sigma0) + " against " + std::to_string(was_sigma0) +
+          (local_windows > 0 ? " (" + std::to_string(local_windows) + " local windows)" : "") +
           (better ? ", kept" : ", dropped"));
       if (!better) {
         mesh = std::move(before);
