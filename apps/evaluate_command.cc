@@ -29,6 +29,7 @@ struct EvaluateArgs {
   std::optional<double> spacing_gsd;
   std::optional<int> min_views;
   std::vector<double> roi;  // xmin ymin zmin xmax ymax zmax, empty = the truth's
+  std::vector<double> principal_point_shift;  // --silhouette: dx dy pixels, empty = none
   // --silhouette: the mesh's outline in every image against the image's foreground.
   bool silhouette = false;
   std::string colmap, images, project, mask_dir;
@@ -44,6 +45,9 @@ void RunSilhouette(const EvaluateArgs& args) {
   } else {
     throw std::invalid_argument(
         "--silhouette needs --project FILE, or --colmap SPARSE_DIR and --images IMAGE_DIR");
+  }
+  if (!args.principal_point_shift.empty()) {
+    ShiftPrincipalPoints(block, args.principal_point_shift[0], args.principal_point_shift[1]);
   }
   const auto start = std::chrono::steady_clock::now();
   MeshData mesh = ReadMesh(args.mesh);
@@ -120,6 +124,9 @@ void AddEvaluateCommand(CLI::App& app) {
   sub->add_option("--roi", args->roi,
                   "score only inside xmin ymin zmin xmax ymax zmax (local; default: the truth's)")
       ->expected(6);
+  sub->add_option("--principal-point-shift", args->principal_point_shift,
+                  "--silhouette: add DX DY pixels to every camera's principal point (as for reconstruct)")
+      ->expected(2);
   sub->add_flag("--silhouette", args->silhouette,
                 "instead: IoU of the mesh's outline and each image's foreground (needs "
                 "--colmap and --images, or --project)");

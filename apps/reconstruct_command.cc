@@ -59,6 +59,7 @@ struct ReconstructArgs {
   int lifting_steps = 0;
   double lifting_range = 30.0;
   std::vector<double> roi;
+  std::vector<double> principal_point_shift;  // dx dy in pixels, empty = none
   std::string start_mesh;
   std::string closed_shape = ClosedStartOptions().shape;
   double closed_lifting_range = ClosedStartOptions().lifting_range;
@@ -149,6 +150,13 @@ void RunReconstruct(const ReconstructArgs& args) {
     }
     say("reading COLMAP model " + args.colmap + " with images in " + args.images);
     block = ReadColmapModel(args.colmap, args.images);
+  }
+  if (!args.principal_point_shift.empty()) {
+    const double dx = args.principal_point_shift[0], dy = args.principal_point_shift[1];
+    ShiftPrincipalPoints(block, dx, dy);
+    std::ostringstream shift;
+    shift << "principal points shifted by (" << dx << ", " << dy << ") pixels";
+    say(shift.str());
   }
   say(std::to_string(block.images.size()) + " images, " + std::to_string(block.cameras.size()) +
       " cameras, " + std::to_string(block.points.size()) + " tie points");
@@ -380,6 +388,10 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--lifting-steps", args->lifting_steps, "object lifting: start heights to try (0 = off)")->capture_default_str();
   sub->add_option("--lifting-range", args->lifting_range, "object lifting: search interval (m)")->capture_default_str();
   sub->add_option("--roi", args->roi, "region of interest: xmin ymin zmin xmax ymax zmax (global)")->expected(6);
+  sub->add_option("--principal-point-shift", args->principal_point_shift,
+                  "add DX DY pixels to every camera's principal point: a calibration whose top-left "
+                  "pixel centre is (0, 0) (e.g. Middlebury's K matrices) needs 0.5 0.5")
+      ->expected(2);
   sub->add_option("--start-mesh", args->start_mesh, "closed (or any) start mesh, PLY or OBJ, local coordinates");
   sub->add_option("--closed-shape", args->closed_shape,
                   "automatic closed start: ellipsoid | hull (convex hull of the tie points) | visual-hull (carved to the silhouettes)")->capture_default_str();

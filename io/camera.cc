@@ -187,4 +187,12 @@ Camera Camera::Scaled(double factor) const {
   return scaled;
 }
 
+Camera Camera::WithPrincipalPointShifted(double dx, double dy) const {
+  Camera shifted = *this;
+  const int cx_index = HasSeparateFocals(model) ? 2 : 1;
+  shifted.params[cx_index] += dx;
+  shifted.params[cx_index + 1] += dy;
+  return shifted;
+}
+
 }  // namespace facets

@@ -70,6 +70,11 @@ struct Camera {
   // up). With the pixel-centre convention above, pixel coordinates scale exactly:
   // focal lengths and principal point multiply by factor, sizes are rounded up.
   Camera Scaled(double factor) const;
+
+  // The same camera with the principal point moved by (dx, dy) pixels. Converts a
+  // calibration made with another pixel convention: one that puts the top-left pixel's
+  // centre at (0, 0) (e.g. Middlebury's K matrices) needs (+0.5, +0.5) here.
+  Camera WithPrincipalPointShifted(double dx, double dy) const;
 };
 
 }  // namespace facets

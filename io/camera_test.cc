@@ -111,6 +111,26 @@ TEST(CameraTest, ScaledHalfKeepsProjectionsConsistent) {
   EXPECT_EQ(odd.Scaled(0.5).height, 41);
 }
 
+// A principal-point shift moves every projection by exactly the shift, distortion or
+// not (distortion acts on normalised coordinates, before the principal point).
+TEST(CameraTest, PrincipalPointShiftMovesEveryProjectionByTheShift) {
+  for (const auto& [label, camera] : RealisticCameras()) {
+    const Camera shifted = camera.WithPrincipalPointShifted(0.5, -0.25);
+    EXPECT_DOUBLE_EQ(shifted.PrincipalX(), camera.PrincipalX() + 0.5) << label;
+    EXPECT_DOUBLE_EQ(shifted.PrincipalY(), camera.PrincipalY() - 0.25) << label;
+    EXPECT_EQ(shifted.FocalX(), camera.FocalX()) << label;
+    double max_error = 0;
+    for (double x = -0.6; x <= 0.6; x += 0.1) {
+      for (double y = -0.4; y <= 0.4; y += 0.1) {
+        const Eigen::Vector3d point(x * 10, y * 10, 10.0);
+        const Eigen::Vector2d moved = shifted.ImageFromCam(point) - camera.ImageFromCam(point);
+        max_error = std::max(max_error, (moved - Eigen::Vector2d(0.5, -0.25)).norm());
+      }
+    }
+    EXPECT_LT(max_error, 1e-9) << label;
+  }
+}
+
 TEST(CameraTest, ModelNamesAndParameterCounts) {
   EXPECT_EQ(CameraModelFromName("SIMPLE_PINHOLE"), CameraModel::kSimplePinhole);
   EXPECT_EQ(CameraModelFromName("OPENCV"), CameraModel::kOpenCV);

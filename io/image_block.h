@@ -9,8 +9,10 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <map>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -75,5 +77,14 @@ struct ImageBlock {
 
   const Camera& CameraOf(const BlockImage& image) const { return cameras.at(image.camera_id); }
 };
+
+// Moves every camera's principal point by (dx, dy) pixels (Camera::WithPrincipalPointShifted):
+// for a calibration made with another pixel convention than Facets' (camera.h).
+inline void ShiftPrincipalPoints(ImageBlock& block, double dx, double dy) {
+  if (!std::isfinite(dx) || !std::isfinite(dy)) {
+    throw std::invalid_argument("principal point shift: both values must be finite numbers");
+  }
+  for (auto& [id, camera] : block.cameras) camera = camera.WithPrincipalPointShifted(dx, dy);
+}
 
 }  // namespace facets
