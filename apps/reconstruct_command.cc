@@ -119,6 +119,7 @@ struct ReconstructArgs {
   bool no_fold_guard = false;
   bool no_relax_unseen = false;
   bool no_untangle = false;
+  bool keep_crossing_facets = false;
   bool sector_regularisation = false;
   bool no_occluders = false;
   bool tiled_images = false;
@@ -260,6 +261,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.adjustment.fold_guard = !args.no_fold_guard;
   options.relax_unseen = !args.no_relax_unseen;
   options.untangle = !args.no_untangle;
+  options.flatten_crossing_facets = !args.keep_crossing_facets;
   options.adjustment.sector_regularisation = args.sector_regularisation;
   options.windows.occluders = !args.no_occluders;
   // Level images in memory while they fit the budget, else tiled on disk and read per
@@ -575,6 +577,9 @@ void AddReconstructCommand(CLI::App& app) {
                 "leave vertices no image saw where the adjustment left them");
   sub->add_flag("--no-untangle", args->no_untangle,
                 "leave triangle pairs that cross after a level as they are (they are counted in report.json)");
+  sub->add_flag("--keep-crossing-facets", args->keep_crossing_facets,
+                "write the surface facets as adjusted even where they cross (by default their "
+                "patches are pulled toward the TIN's chords there; counted in report.json)");
   sub->add_flag("--no-fold-guard", args->no_fold_guard, "do not limit vertex steps that would fold the surface");
   sub->add_flag("--no-occluders", args->no_occluders, "windows do not see the surface around them");
   sub->add_flag("--tiled-images", args->tiled_images, "level images on disk, read per window (also when over --image-memory)");

@@ -213,6 +213,15 @@ std::string ReconstructionReport::Json() const {
   j["seconds_total"] = seconds_total;
   j["seconds_images"] = seconds_images;
   j["images_cached"] = images_cached;
+  if (facet_crossings.pairs_found >= 0) {
+    j["facet_crossings"] = {{"pairs_found", facet_crossings.pairs_found},
+                            {"pairs_left", facet_crossings.pairs_left},
+                            {"rounds", facet_crossings.rounds},
+                            {"tin_faces_changed", facet_crossings.faces_changed},
+                            {"tin_vertices_weighted", facet_crossings.vertices_weighted},
+                            {"unchecked_facets", facet_crossings.unchecked_facets},
+                            {"max_node_move", facet_crossings.max_move}};
+  }
   for (const auto& t : lifting) {
     j["object_lifting"].push_back({{"height", t.height}, {"sigma0", t.sigma0},
                                    {"mean_dn", t.mean_dn}, {"observations", t.observations}});
@@ -833,6 +842,10 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     if (level == cycle_top && cycle < options.v_cycles) cycle_top_tin = mesh;  // the next cycle starts from it
   }
   result.mesh = std::move(mesh);
+  if (options.flatten_crossing_facets) {
+    result.report.facet_crossings = FlattenCrossingFacets(result.mesh, &result.tessellation);
+    say("surface facets: " + result.report.facet_crossings.Brief());
+  }
   result.report.seconds_total = Seconds(start);
   say("done: " + result.report.BriefReport());
   return result;

@@ -23,6 +23,7 @@
 #include "engine/v_cycle.h"
 #include "engine/window_adjustment.h"
 #include "io/image_block.h"
+#include "mesh/facet_crossings.h"
 #include "mesh/tessellation.h"
 #include "mesh/tin.h"
 
@@ -109,6 +110,11 @@ struct ReconstructionOptions {
   // fold guard only sees one window's step) are untangled by local smoothing of their
   // corners and rings (UntangleSelfIntersections, mesh/surface_validity.h).
   bool untangle = true;
+  // After the finest level, the product surface's facets that cross (G1 patches bulging
+  // through a nearby sheet whose chords do not cross) are pulled toward their TIN chords
+  // until none cross (FlattenCrossingFacets, mesh/facet_crossings.h; issue 7: no
+  // self-intersections in the output). The TIN, grey values and sigma stay as adjusted.
+  bool flatten_crossing_facets = true;
   // After a level's adjustment, chains of vertices along a straight crease (a ridge
   // skew to the grid, a zigzag of edges) are put on the crease's line
   // (StraightenCreaseChains, mesh/creases.h) and the level runs again, kept only when
@@ -266,6 +272,8 @@ struct ReconstructionReport {
   // preview's up for a facade (io/preview.h).
   Eigen::Vector3d camera_up = Eigen::Vector3d::UnitZ();
   std::vector<LevelReport> levels;  // in processing order, coarsest first
+  // ReconstructionOptions::flatten_crossing_facets (pairs_found -1: not run).
+  FacetCrossingRepair facet_crossings;
   double seconds_total = 0.0;
   double seconds_images = 0.0;
   bool images_cached = false;

@@ -186,11 +186,9 @@ std::string ClosedSurfaceCheck::Brief() const {
   return out.str();
 }
 
-ClosedSurfaceCheck CheckClosedSurface(const std::vector<Eigen::Vector3d>& points,
-                                      const std::vector<Eigen::Vector3i>& triangles,
-                                      double merge_tolerance) {
-  // Merge coincident points: hash cells of the tolerance, search the 27 around a point.
-  const double cell = std::max(merge_tolerance, 1e-15);
+std::vector<int> MergeCoincidentPoints(const std::vector<Eigen::Vector3d>& points, double tolerance) {
+  // Hash cells of the tolerance, search the 27 around a point.
+  const double cell = std::max(tolerance, 1e-15);
   auto key = [&](const Eigen::Vector3d& p, int dx, int dy, int dz) {
     const long long x = static_cast<long long>(std::floor(p.x() / cell)) + dx;
     const long long y = static_cast<long long>(std::floor(p.y() / cell)) + dy;
@@ -199,33 +197,37 @@ ClosedSurfaceCheck CheckClosedSurface(const std::vector<Eigen::Vector3d>& points
   };
   std::unordered_multimap<long long, int> cells;
   std::vector<int> merged(points.size());
-  std::vector<Kernel::Point_3> unique;
+  int count = 0;
   for (size_t i = 0; i < points.size(); ++i) {
     int found = -1;
-    if (merge_tolerance <= 0.0) {  // no merging: every point is its own vertex
-      merged[i] = static_cast<int>(unique.size());
-      unique.emplace_back(points[i].x(), points[i].y(), points[i].z());
-      continue;
-    }
-    for (int dx = -1; dx <= 1 && found < 0; ++dx) {
-      for (int dy = -1; dy <= 1 && found < 0; ++dy) {
-        for (int dz = -1; dz <= 1 && found < 0; ++dz) {
-          auto range = cells.equal_range(key(points[i], dx, dy, dz));
-          for (auto it = range.first; it != range.second; ++it) {
-            if ((points[it->second] - points[i]).norm() <= merge_tolerance) {
-              found = merged[it->second];
-              break;
+    if (tolerance > 0.0) {
+      for (int dx = -1; dx <= 1 && found < 0; ++dx) {
+        for (int dy = -1; dy <= 1 && found < 0; ++dy) {
+          for (int dz = -1; dz <= 1 && found < 0; ++dz) {
+            auto range = cells.equal_range(key(points[i], dx, dy, dz));
+            for (auto it = range.first; it != range.second; ++it) {
+              if ((points[it->second] - points[i]).norm() <= tolerance) {
+                found = merged[it->second];
+                break;
+              }
             }
           }
         }
       }
     }
-    if (found < 0) {
-      found = static_cast<int>(unique.size());
-      unique.emplace_back(points[i].x(), points[i].y(), points[i].z());
-    }
-    merged[i] = found;
-    cells.emplace(key(points[i], 0, 0, 0), static_cast<int>(i));
+    merged[i] = found >= 0 ? found : count++;
+    if (tolerance > 0.0) cells.emplace(key(points[i], 0, 0, 0), static_cast<int>(i));
+  }
+  return merged;
+}
+
+ClosedSurfaceCheck CheckClosedSurface(const std::vector<Eigen::Vector3d>& points,
+                                      const std::vector<Eigen::Vector3i>& triangles,
+                                      double merge_tolerance) {
+  const std::vector<int> merged = MergeCoincidentPoints(points, merge_tolerance);
+  std::vector<Kernel::Point_3> unique;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (merged[i] == static_cast<int>(unique.size())) unique.emplace_back(points[i].x(), points[i].y(), points[i].z());
   }
   std::vector<std::vector<std::size_t>> polygons;
   polygons.reserve(triangles.size());

@@ -56,6 +56,11 @@ struct ClosedSurfaceCheck {
   std::string Brief() const;
 };
 
+// For each point, the index of the merged point it belongs to: points within `tolerance`
+// of an earlier one take its index, merged indices count up from 0 in order of first
+// appearance (tolerance <= 0: every point its own).
+std::vector<int> MergeCoincidentPoints(const std::vector<Eigen::Vector3d>& points, double tolerance);
+
 // Coincident points (within `merge_tolerance`) are merged first: a tessellation split
 // along creases holds the same point twice, which is not a hole.
 ClosedSurfaceCheck CheckClosedSurface(const std::vector<Eigen::Vector3d>& points,

@@ -1,0 +1,158 @@
+#include "mesh/facet_crossings.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <array>
+#include <iterator>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include "mesh/closed_surface.h"
+
+namespace facets {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using CgalMesh = CGAL::Surface_mesh<Kernel::Point_3>;
+
+// Crossing facet pairs (indices into tess.triangles), and the facets that could not be
+// checked (non-manifold once coinciding nodes are merged).
+struct CrossingPairs {
+  std::vector<std::pair<int, int>> pairs;
+  int unchecked = 0;
+};
+
+CrossingPairs FindCrossingFacets(const Tessellation& tess) {
+  // Crease duplicates are evaluated once per side: they agree to rounding, not bit for
+  // bit, and unmerged they would count as crossing (facets meeting along an edge).
+  Eigen::AlignedBox3d box;
+  for (const auto& p : tess.points) box.extend(p);
+  const double tolerance = 1e-9 * (1.0 + (tess.points.empty() ? 0.0 : box.diagonal().norm()));
+  const std::vector<int> merged = MergeCoincidentPoints(tess.points, tolerance);
+  CgalMesh cgal;
+  std::vector<CgalMesh::Vertex_index> vertex_of(tess.points.size());
+  std::vector<CgalMesh::Vertex_index> merged_vertex;
+  for (size_t p = 0; p < tess.points.size(); ++p) {
+    if (merged[p] == static_cast<int>(merged_vertex.size())) {
+      const Eigen::Vector3d& x = tess.points[p];
+      merged_vertex.push_back(cgal.add_vertex(Kernel::Point_3(x.x(), x.y(), x.z())));
+    }
+    vertex_of[p] = merged_vertex[merged[p]];
+  }
+  CrossingPairs result;
+  std::vector<int> facet_of_face;  // CGAL face index -> facet
+  facet_of_face.reserve(tess.triangles.size());
+  for (size_t s = 0; s < tess.triangles.size(); ++s) {
+    const Eigen::Vector3i& t = tess.triangles[s];
+    const CgalMesh::Vertex_index a = vertex_of[t[0]], b = vertex_of[t[1]], c = vertex_of[t[2]];
+    if (a == b || b == c || a == c) {  // a facet collapsed to a point or segment
+      ++result.unchecked;
+      continue;
+    }
+    const CgalMesh::Face_index f = cgal.add_face(a, b, c);
+    if (f == CgalMesh::null_face()) {
+      ++result.unchecked;
+      continue;
+    }
+    facet_of_face.push_back(static_cast<int>(s));
+  }
+  std::vector<std::pair<CgalMesh::Face_index, CgalMesh::Face_index>> pairs;
+  CGAL::Polygon_mesh_processing::self_intersections(cgal, std::back_inserter(pairs));
+  result.pairs.reserve(pairs.size());
+  for (const auto& [f, g] : pairs) {
+    result.pairs.emplace_back(facet_of_face[static_cast<int>(f)], facet_of_face[static_cast<int>(g)]);
+  }
+  return result;
+}
+
+}  // namespace
+
+std::string FacetCrossingRepair::Brief() const {
+  std::ostringstream out;
+  out << pairs_found << " crossing facet pairs";
+  if (pairs_found > 0) {
+    out << ", " << faces_changed << " TIN faces pulled toward their chords in " << rounds
+        << " rounds (largest node move " << max_move << " m), " << pairs_left << " pairs left";
+  }
+  if (unchecked_facets > 0) out << ", " << unchecked_facets << " facets not checked";
+  return out.str();
+}
+
+int CountCrossingFacets(const Tessellation& tess) {
+  return static_cast<int>(FindCrossingFacets(tess).pairs.size());
+}
+
+FacetCrossingRepair FlattenCrossingFacets(const TinMesh& mesh, Tessellation* tess, int max_rounds) {
+  if (tess->NumFaces() != static_cast<int>(mesh.n_faces())) {
+    throw std::invalid_argument("FlattenCrossingFacets: the tessellation has " +
+                                std::to_string(tess->NumFaces()) + " faces, the TIN " +
+                                std::to_string(mesh.n_faces()));
+  }
+  std::vector<std::array<int, 3>> face_vertices(mesh.n_faces());
+  for (auto f : mesh.faces()) {
+    int k = 0;
+    for (auto v : mesh.fv_range(f)) face_vertices[f.idx()][k++] = v.idx();
+  }
+  // Each node as chord point + offset of the patch from it.
+  const size_t n = tess->points.size();
+  std::vector<Eigen::Vector3d> chord(n), offset(n);
+  for (size_t p = 0; p < n; ++p) {
+    const auto& fv = face_vertices[tess->point_face[p]];
+    const Eigen::Vector3d& b = tess->point_barycentric[p];
+    chord[p] = Eigen::Vector3d::Zero();
+    for (int i = 0; i < 3; ++i) chord[p] += b[i] * ToEigen(mesh.point(TinMesh::VertexHandle(fv[i])));
+    offset[p] = tess->points[p] - chord[p];
+  }
+  std::vector<double> weight(mesh.n_vertices(), 1.0);
+  FacetCrossingRepair repair;
+  for (int round = 0;; ++round) {
+    const CrossingPairs crossing = FindCrossingFacets(*tess);
+    if (round == 0) {
+      repair.pairs_found = static_cast<int>(crossing.pairs.size());
+      repair.unchecked_facets = crossing.unchecked;
+    }
+    repair.pairs_left = static_cast<int>(crossing.pairs.size());
+    if (crossing.pairs.empty() || round == max_rounds) break;
+    // Lower the weights of the crossing faces' vertices one step: 1, 0.5, 0.25, 0.
+    std::vector<bool> lowered(mesh.n_vertices(), false);
+    bool changed = false;
+    for (const auto& [s, t] : crossing.pairs) {
+      for (const int facet : {s, t}) {
+        for (const int v : face_vertices[facet / kSubTrianglesPerFace]) {
+          if (lowered[v] || weight[v] == 0.0) continue;
+          lowered[v] = true;
+          weight[v] = weight[v] > 0.3 ? 0.5 * weight[v] : 0.0;
+          changed = true;
+        }
+      }
+    }
+    if (!changed) break;  // every crossing face is flat already: the TIN itself crosses
+    ++repair.rounds;
+    for (size_t p = 0; p < n; ++p) {
+      const auto& fv = face_vertices[tess->point_face[p]];
+      const Eigen::Vector3d& b = tess->point_barycentric[p];
+      const double w = b[0] * weight[fv[0]] + b[1] * weight[fv[1]] + b[2] * weight[fv[2]];
+      if (w < 1.0) tess->points[p] = chord[p] + w * offset[p];
+    }
+  }
+  std::vector<bool> face_changed(mesh.n_faces(), false);
+  for (size_t f = 0; f < face_vertices.size(); ++f) {
+    for (const int v : face_vertices[f]) face_changed[f] = face_changed[f] || weight[v] < 1.0;
+  }
+  repair.faces_changed = static_cast<int>(std::count(face_changed.begin(), face_changed.end(), true));
+  repair.vertices_weighted = static_cast<int>(
+      std::count_if(weight.begin(), weight.end(), [](double w) { return w < 1.0; }));
+  for (size_t p = 0; p < n; ++p) {
+    repair.max_move = std::max(repair.max_move, (tess->points[p] - (chord[p] + offset[p])).norm());
+  }
+  return repair;
+}
+
+}  // namespace facets
