@@ -11,6 +11,7 @@
 #include <iterator>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -29,28 +30,35 @@ struct CrossingPairs {
   int unchecked = 0;
 };
 
-CrossingPairs FindCrossingFacets(const Tessellation& tess) {
+CrossingPairs FindCrossingTriangles(const std::vector<Eigen::Vector3d>& points,
+                                    const std::vector<Eigen::Vector3i>& triangles) {
   // Crease duplicates are evaluated once per side: they agree to rounding, not bit for
   // bit, and unmerged they would count as crossing (facets meeting along an edge).
   Eigen::AlignedBox3d box;
-  for (const auto& p : tess.points) box.extend(p);
-  const double tolerance = 1e-9 * (1.0 + (tess.points.empty() ? 0.0 : box.diagonal().norm()));
-  const std::vector<int> merged = MergeCoincidentPoints(tess.points, tolerance);
+  for (const auto& p : points) box.extend(p);
+  const double tolerance = 1e-9 * (1.0 + (points.empty() ? 0.0 : box.diagonal().norm()));
+  const std::vector<int> merged = MergeCoincidentPoints(points, tolerance);
   CgalMesh cgal;
-  std::vector<CgalMesh::Vertex_index> vertex_of(tess.points.size());
+  std::vector<CgalMesh::Vertex_index> vertex_of(points.size());
   std::vector<CgalMesh::Vertex_index> merged_vertex;
-  for (size_t p = 0; p < tess.points.size(); ++p) {
+  for (size_t p = 0; p < points.size(); ++p) {
     if (merged[p] == static_cast<int>(merged_vertex.size())) {
-      const Eigen::Vector3d& x = tess.points[p];
+      const Eigen::Vector3d& x = points[p];
       merged_vertex.push_back(cgal.add_vertex(Kernel::Point_3(x.x(), x.y(), x.z())));
     }
     vertex_of[p] = merged_vertex[merged[p]];
   }
   CrossingPairs result;
   std::vector<int> facet_of_face;  // CGAL face index -> facet
-  facet_of_face.reserve(tess.triangles.size());
-  for (size_t s = 0; s < tess.triangles.size(); ++s) {
-    const Eigen::Vector3i& t = tess.triangles[s];
+  facet_of_face.reserve(triangles.size());
+  for (size_t s = 0; s < triangles.size(); ++s) {
+    const Eigen::Vector3i& t = triangles[s];
+    for (int c = 0; c < 3; ++c) {
+      if (t[c] < 0 || t[c] >= static_cast<int>(points.size())) {
+        throw std::invalid_argument("triangle " + std::to_string(s) + " refers to point " +
+                                    std::to_string(t[c]) + " of " + std::to_string(points.size()));
+      }
+    }
     const CgalMesh::Vertex_index a = vertex_of[t[0]], b = vertex_of[t[1]], c = vertex_of[t[2]];
     if (a == b || b == c || a == c) {  // a facet collapsed to a point or segment
       ++result.unchecked;
@@ -72,6 +80,10 @@ CrossingPairs FindCrossingFacets(const Tessellation& tess) {
   return result;
 }
 
+CrossingPairs FindCrossingFacets(const Tessellation& tess) {
+  return FindCrossingTriangles(tess.points, tess.triangles);
+}
+
 }  // namespace
 
 std::string FacetCrossingRepair::Brief() const {
@@ -87,6 +99,12 @@ std::string FacetCrossingRepair::Brief() const {
 
 int CountCrossingFacets(const Tessellation& tess) {
   return static_cast<int>(FindCrossingFacets(tess).pairs.size());
+}
+
+TriangleCrossings CountCrossingTriangles(const std::vector<Eigen::Vector3d>& points,
+                                         const std::vector<Eigen::Vector3i>& triangles) {
+  const CrossingPairs found = FindCrossingTriangles(points, triangles);
+  return {static_cast<int>(found.pairs.size()), found.unchecked};
 }
 
 FacetCrossingRepair FlattenCrossingFacets(const TinMesh& mesh, Tessellation* tess, int max_rounds) {

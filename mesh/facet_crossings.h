@@ -13,6 +13,9 @@
 #pragma once
 
 #include <string>
+#include <vector>
+
+#include <Eigen/Core>
 
 #include "mesh/tessellation.h"
 #include "mesh/tin.h"
@@ -37,5 +40,15 @@ FacetCrossingRepair FlattenCrossingFacets(const TinMesh& mesh, Tessellation* tes
 // Crossing facet pairs of a tessellation (CGAL self_intersections on the facets with
 // coinciding nodes merged), for tests and reports.
 int CountCrossingFacets(const Tessellation& tess);
+
+// The same for any triangle mesh (an evaluated surface.ply, another tool's mesh):
+// crossing pairs, and the triangles left out of the check (degenerate once coinciding
+// points are merged, or non-manifold).
+struct TriangleCrossings {
+  int pairs = 0;
+  int unchecked = 0;
+};
+TriangleCrossings CountCrossingTriangles(const std::vector<Eigen::Vector3d>& points,
+                                         const std::vector<Eigen::Vector3i>& triangles);
 
 }  // namespace facets

@@ -330,6 +330,7 @@ EvaluationReport Evaluate(const TruthScene& truth, const MeshData& reconstructio
   const double gsd = truth.ground_pixel_size;
   EvaluationReport report;
   report.ground_pixel_size = gsd;
+  report.mesh_crossings = CountCrossingTriangles(reconstruction.vertices, reconstruction.faces);
   report.thresholds_gsd = options.completeness_thresholds_gsd;
   report.num_images = truth.block.images.size();
   report.roi = options.roi ? options.roi : truth.roi;
@@ -698,6 +699,9 @@ std::string EvaluationReport::Table() const {
     out << line;
   }
 
+  out << "\nSelf-intersections of the mesh: " << mesh_crossings.pairs << " crossing triangle pairs";
+  if (mesh_crossings.unchecked > 0) out << " (" << mesh_crossings.unchecked << " triangles not checked)";
+  out << "\n";
   out << "\nCompleteness (truth seen by the images -> reconstruction)\n";
   std::string head = "  region              samples";
   for (double t : thresholds_gsd) {
@@ -762,6 +766,8 @@ std::string EvaluationReport::Json(bool with_samples) const {
   j["thresholds_gsd"] = thresholds_gsd;
   if (!truth_name.empty()) j["truth"] = truth_name;
   if (!mesh_name.empty()) j["mesh"] = mesh_name;
+  j["mesh_crossing_pairs"] = mesh_crossings.pairs;
+  j["mesh_unchecked_triangles"] = mesh_crossings.unchecked;
   if (roi) {
     j["region_of_interest"] = {{"min", {roi->min.x(), roi->min.y(), roi->min.z()}},
                                {"max", {roi->max.x(), roi->max.y(), roi->max.z()}}};

@@ -23,6 +23,7 @@
 
 #include "io/image_block.h"
 #include "io/ply_io.h"
+#include "mesh/facet_crossings.h"
 
 namespace facets {
 
@@ -164,6 +165,10 @@ struct EvaluationReport {
   std::vector<TruthSample> truth_samples;
   std::vector<WallLean> leaning_walls;  // every truth wall with a nonzero lean
   std::vector<SigmaByViews> sigma_by_views;  // empty when the mesh has no sigma/views
+  // Self-intersections of the whole evaluated mesh (CGAL self_intersections, coinciding
+  // vertices merged; mesh/facet_crossings.h): crossing triangle pairs, and triangles the
+  // check had to leave out (degenerate or non-manifold after the merge).
+  TriangleCrossings mesh_crossings;
 
   // The region's row or nullptr (label -1 = all regions).
   const RegionScore* Region(int label) const;

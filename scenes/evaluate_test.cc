@@ -165,6 +165,10 @@ TEST_F(EvaluateTest, TruthAgainstItselfIsPerfect) {
             << wall->few_views.count << " by < 2\n";
   const auto json = nlohmann::json::parse(report.Json());
   EXPECT_EQ(json["regions"].size(), 5u);
+  // The truth is a union of pieces (ground grid, building boxes standing in it), so its
+  // triangles touch and cross where the pieces meet; the count is reported as found.
+  EXPECT_GT(report.mesh_crossings.pairs, 0);
+  EXPECT_EQ(json["mesh_crossing_pairs"], report.mesh_crossings.pairs);
 }
 
 TEST_F(EvaluateTest, FlatPlaneFailsOnWallsAndPassesOnGround) {
@@ -183,6 +187,15 @@ TEST_F(EvaluateTest, FlatPlaneFailsOnWallsAndPassesOnGround) {
   EXPECT_GT(Within(ground, 1), 0.99);
   EXPECT_EQ(Within(roof, 1), 0.0);
   EXPECT_LT(ground->accuracy.median, 1e-9);
+  EXPECT_EQ(report.mesh_crossings.pairs, 0);
+  // A vertical square through the plane: its two triangles cross the plane's two.
+  MeshData crossed = plane;
+  crossed.vertices.insert(crossed.vertices.end(), {{0, -5, -1}, {0, 5, -1}, {0, 5, 1}, {0, -5, 1}});
+  crossed.faces.insert(crossed.faces.end(), {{4, 5, 6}, {4, 6, 7}});
+  const EvaluationReport crossed_report = Evaluate(*truth_, crossed);
+  EXPECT_GE(crossed_report.mesh_crossings.pairs, 2);
+  EXPECT_LE(crossed_report.mesh_crossings.pairs, 4);
+  EXPECT_EQ(crossed_report.mesh_crossings.unchecked, 0);
 }
 
 TEST_F(EvaluateTest, VerticalOffsetIsMeasuredExactly) {
