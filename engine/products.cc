@@ -17,19 +17,6 @@
 #include "visibility/top_view.h"
 
 namespace facets {
-namespace {
-
-std::vector<std::array<int, 3>> FaceVertices(const TinMesh& mesh) {
-  std::vector<std::array<int, 3>> out(mesh.n_faces());
-  for (auto fh : mesh.faces()) {
-    int k = 0;
-    for (auto vh : mesh.fv_range(fh)) out[fh.idx()][k++] = vh.idx();
-  }
-  return out;
-}
-
-}  // namespace
-
 void ProductOptions::SetFormats(const std::string& list) {
   ply = glb = vrml = ortho = dsm = sigma = preview = false;
   std::istringstream in(list);

@@ -80,10 +80,6 @@ CrossingPairs FindCrossingTriangles(const std::vector<Eigen::Vector3d>& points,
   return result;
 }
 
-CrossingPairs FindCrossingFacets(const Tessellation& tess) {
-  return FindCrossingTriangles(tess.points, tess.triangles);
-}
-
 }  // namespace
 
 std::string FacetCrossingRepair::Brief() const {
@@ -98,7 +94,7 @@ std::string FacetCrossingRepair::Brief() const {
 }
 
 int CountCrossingFacets(const Tessellation& tess) {
-  return static_cast<int>(FindCrossingFacets(tess).pairs.size());
+  return static_cast<int>(FindCrossingTriangles(tess.points, tess.triangles).pairs.size());
 }
 
 TriangleCrossings CountCrossingTriangles(const std::vector<Eigen::Vector3d>& points,
@@ -113,11 +109,7 @@ FacetCrossingRepair FlattenCrossingFacets(const TinMesh& mesh, Tessellation* tes
                                 std::to_string(tess->NumFaces()) + " faces, the TIN " +
                                 std::to_string(mesh.n_faces()));
   }
-  std::vector<std::array<int, 3>> face_vertices(mesh.n_faces());
-  for (auto f : mesh.faces()) {
-    int k = 0;
-    for (auto v : mesh.fv_range(f)) face_vertices[f.idx()][k++] = v.idx();
-  }
+  const std::vector<std::array<int, 3>> face_vertices = FaceVertices(mesh);
   // Each node as chord point + offset of the patch from it.
   const size_t n = tess->points.size();
   std::vector<Eigen::Vector3d> chord(n), offset(n);
@@ -131,7 +123,7 @@ FacetCrossingRepair FlattenCrossingFacets(const TinMesh& mesh, Tessellation* tes
   std::vector<double> weight(mesh.n_vertices(), 1.0);
   FacetCrossingRepair repair;
   for (int round = 0;; ++round) {
-    const CrossingPairs crossing = FindCrossingFacets(*tess);
+    const CrossingPairs crossing = FindCrossingTriangles(tess->points, tess->triangles);
     if (round == 0) {
       repair.pairs_found = static_cast<int>(crossing.pairs.size());
       repair.unchecked_facets = crossing.unchecked;
@@ -160,11 +152,10 @@ FacetCrossingRepair FlattenCrossingFacets(const TinMesh& mesh, Tessellation* tes
       if (w < 1.0) tess->points[p] = chord[p] + w * offset[p];
     }
   }
-  std::vector<bool> face_changed(mesh.n_faces(), false);
-  for (size_t f = 0; f < face_vertices.size(); ++f) {
-    for (const int v : face_vertices[f]) face_changed[f] = face_changed[f] || weight[v] < 1.0;
-  }
-  repair.faces_changed = static_cast<int>(std::count(face_changed.begin(), face_changed.end(), true));
+  repair.faces_changed = static_cast<int>(
+      std::count_if(face_vertices.begin(), face_vertices.end(), [&](const std::array<int, 3>& fv) {
+        return weight[fv[0]] < 1.0 || weight[fv[1]] < 1.0 || weight[fv[2]] < 1.0;
+      }));
   repair.vertices_weighted = static_cast<int>(
       std::count_if(weight.begin(), weight.end(), [](double w) { return w < 1.0; }));
   for (size_t p = 0; p < n; ++p) {

@@ -141,6 +141,15 @@ G1Patch FacePatch(const TinMesh& mesh, TinMesh::FaceHandle fh) {
   return G1Patch(x[0], x[1], x[2], n[0], n[1], n[2]);
 }
 
+std::vector<std::array<int, 3>> FaceVertices(const TinMesh& mesh) {
+  std::vector<std::array<int, 3>> out(mesh.n_faces());
+  for (auto fh : mesh.faces()) {
+    int k = 0;
+    for (auto vh : mesh.fv_range(fh)) out[fh.idx()][k++] = vh.idx();
+  }
+  return out;
+}
+
 std::vector<G1Patch> BuildPatches(const TinMesh& mesh) {
   std::vector<G1Patch> patches(mesh.n_faces());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.n_faces(), 1024),

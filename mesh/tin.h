@@ -10,6 +10,7 @@
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
 #include <Eigen/Core>
+#include <array>
 #include <functional>
 #include <string>
 #include <vector>
@@ -60,6 +61,9 @@ TinMesh LoadStartMesh(const std::string& path);
 // Face normals (unit) and vertex normals = normalised mean of the adjacent unit face
 // normals, weighted by the corner angle at the vertex. Isolated vertices keep their normal.
 void UpdateVertexNormals(TinMesh* mesh);
+
+// The three vertex indices of every face, in face order (fv_range order).
+std::vector<std::array<int, 3>> FaceVertices(const TinMesh& mesh);
 
 // G1 patch of face fh from its three vertices and vertex normals, in face order.
 G1Patch FacePatch(const TinMesh& mesh, TinMesh::FaceHandle fh);
