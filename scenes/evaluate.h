@@ -3,7 +3,8 @@
 //
 // Accuracy (reconstruction -> truth): the reconstruction is sampled uniformly by area;
 // each sample's distance to the truth mesh (exact point-triangle distance, CGAL AABB
-// tree) is attributed to the region label of the closest truth face.
+// tree) is attributed to the region label of the closest truth face, and split by the
+// number of images that see the closest truth point (>= 2 or < 2).
 // Completeness (truth -> reconstruction): the truth surface is sampled the same way;
 // a sample counts only when at least `min_views` images see it (inside the image, not
 // occluded: Embree first hit within a tolerance of the sample, not grazing); the share
@@ -104,6 +105,9 @@ struct RegionScore {
   int label = 0;  // -1 for the row over all regions
   std::string name;
   DistanceStats accuracy;             // reconstruction samples attributed to the region
+  // Of those, the samples whose closest truth point is seen by >= 2 / < 2 images (the
+  // same visibility test as completeness, applied to that point).
+  DistanceStats accuracy_multi_view, accuracy_few_views;
   CompletenessStats completeness;     // truth samples seen by >= min_views images
   CompletenessStats multi_view;       // of those, seen by >= 2 images
   CompletenessStats few_views;        // of those, seen by < 2 images

@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
+#include <array>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
@@ -187,6 +189,12 @@ TEST_F(EvaluateTest, FlatPlaneFailsOnWallsAndPassesOnGround) {
   EXPECT_GT(Within(ground, 1), 0.99);
   EXPECT_EQ(Within(roof, 1), 0.0);
   EXPECT_LT(ground->accuracy.median, 1e-9);
+  // The plane runs through the ground hidden under the building (6 x 6 m): those
+  // samples' closest truth point is seen by no image, so they count as ground < 2 views.
+  const double footprint_samples = 36.0 / (report.sample_spacing * report.sample_spacing);
+  EXPECT_GE(ground->accuracy_few_views.count, static_cast<size_t>(0.99 * footprint_samples));
+  EXPECT_EQ(ground->accuracy_multi_view.count + ground->accuracy_few_views.count,
+            ground->accuracy.count);
   EXPECT_EQ(report.mesh_crossings.pairs, 0);
   // A vertical square through the plane: its two triangles cross the plane's two.
   MeshData crossed = plane;
@@ -196,6 +204,33 @@ TEST_F(EvaluateTest, FlatPlaneFailsOnWallsAndPassesOnGround) {
   EXPECT_GE(crossed_report.mesh_crossings.pairs, 2);
   EXPECT_LE(crossed_report.mesh_crossings.pairs, 4);
   EXPECT_EQ(crossed_report.mesh_crossings.unchecked, 0);
+}
+
+// The truth against itself: accuracy samples and truth samples are the same points, so
+// the accuracy split by the views of the closest truth point must give the shares that
+// completeness counts for the truth samples.
+TEST_F(EvaluateTest, AccuracySplitByViewsMatchesTheTruthSamplesViews) {
+  const EvaluationReport report = Evaluate(*truth_, truth_->mesh);
+  std::map<int, std::array<size_t, 2>> truth_views;  // label -> {>= 2 views, all}
+  for (const TruthSample& s : report.truth_samples) {
+    truth_views[s.label][0] += s.views >= 2;
+    ++truth_views[s.label][1];
+  }
+  for (const RegionScore& r : report.regions) {
+    if (r.label < 0) continue;
+    ASSERT_EQ(r.accuracy_multi_view.count + r.accuracy_few_views.count, r.accuracy.count) << r.name;
+    ASSERT_GT(r.accuracy.count, 0u) << r.name;
+    const double accuracy_share = double(r.accuracy_multi_view.count) / r.accuracy.count;
+    const double truth_share = double(truth_views[r.label][0]) / truth_views[r.label][1];
+    std::cout << r.name << ": >= 2 views " << 100 * accuracy_share << " % of accuracy samples, "
+              << 100 * truth_share << " % of truth samples\n";
+    EXPECT_NEAR(accuracy_share, truth_share, 0.005) << r.name;
+    EXPECT_LT(r.accuracy_multi_view.max, 1e-9) << r.name;
+  }
+  // Some of the ground (under the building and behind it) is seen by fewer than two
+  // images, so the split is not trivial.
+  EXPECT_GT(report.Region("ground")->accuracy_few_views.count, 0u);
+  EXPECT_GT(report.Region("ground")->accuracy_multi_view.count, 0u);
 }
 
 TEST_F(EvaluateTest, VerticalOffsetIsMeasuredExactly) {
