@@ -109,6 +109,7 @@ struct ReconstructArgs {
   double normal_search_tolerance = ReconstructionOptions().normal_search_tolerance;
   int normal_search_local_rings = ReconstructionOptions().normal_search_local_rings;
   int v_cycle_rounds_last_level = ReconstructionOptions().v_cycle_rounds_last_level;
+  bool thorough_walls = false;  // the V-cycle bundle (see --thorough-walls)
   double normal_search_min_cos = NormalSearchOptions().min_cos;
   double normal_search_max_here = NormalSearchOptions().max_score_here;
   double normal_search_min_angle = NormalSearchOptions().min_angle_to_views_deg;
@@ -140,6 +141,13 @@ void RunReconstruct(const ReconstructArgs& args) {
   if (args.threads > 0) {
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                     args.threads);
+  }
+  if (args.thorough_walls) {
+    std::ostringstream bundle;
+    bundle << "settings: --thorough-walls: " << args.v_cycles << " v-cycle(s), normal-search rounds in them down to level "
+           << args.v_cycle_rounds_last_level << ", tolerance " << args.normal_search_tolerance << ", local rings "
+           << args.normal_search_local_rings;
+    say(bundle.str());
   }
   ImageBlock block;
   if (!args.project.empty()) {
@@ -590,8 +598,19 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_flag("--no-rasters", args->no_rasters, "do not write ortho.tif, dsm.tif, sigma.tif");
   sub->add_flag("--no-preview", args->no_preview, "do not write preview.png");
   sub->add_flag("--keep-levels", args->keep_levels, "also write each level's TIN as levels/level_K.ply (K = pyramid level)");
-  sub->callback([args] {
+  sub->add_flag("--thorough-walls", args->thorough_walls,
+                "walls (issue 7): one V-cycle with normal-search rounds down to level 0, re-adjusted locally "
+                "(--v-cycles 1 --v-cycle-rounds-last-level 0 --normal-search-tolerance 1 "
+                "--normal-search-local-rings 1, each unless given); about 3x the time");
+  sub->callback([args, sub] {
     try {
+      if (args->thorough_walls) {
+        // The bundle set by hand before: options the user gives explicitly win.
+        if (sub->count("--v-cycles") == 0) args->v_cycles = 1;
+        if (sub->count("--v-cycle-rounds-last-level") == 0) args->v_cycle_rounds_last_level = 0;
+        if (sub->count("--normal-search-tolerance") == 0) args->normal_search_tolerance = 1.0;
+        if (sub->count("--normal-search-local-rings") == 0) args->normal_search_local_rings = 1;
+      }
       RunReconstruct(*args);
     } catch (const std::exception& e) {
       std::cerr << "facets reconstruct: error: " << e.what() << "\n";

@@ -164,5 +164,34 @@ TEST(ExportCli, ReExportsAReconstructedRun) {
   EXPECT_EQ(Facets("export " + incomplete.string() + " --out " + some.string() + " --formats wrl,preview"), 0);
 }
 
+// `facets reconstruct --thorough-walls` (issue 7) sets the V-cycle bundle, and an option
+// given explicitly wins over the bundle's value: read back from the run's log.
+TEST(ReconstructCli, ThoroughWallsSetsTheVCycleBundleAndExplicitOptionsWin) {
+  const fs::path dir = fs::path(testing::TempDir()) / "facets_thorough_cli";
+  fs::remove_all(dir);
+  const std::string scene = std::string(FACETS_SOURCE_DIR) + "/scenes/data/seed_gable_parallel.json";
+  ASSERT_EQ(Facets("render " + scene + " --out " + (dir / "scene").string()), 0);
+  const std::string base = "reconstruct --colmap " + (dir / "scene" / "sparse").string() + " --images " +
+                           (dir / "scene" / "images").string() +
+                           " --levels 2 --max-iterations 2 --roi -6 -6 0 6 6 9 --no-glb --no-vrml --no-rasters "
+                           "--no-preview --thorough-walls --out ";
+  auto log_of = [&](const std::string& name, const std::string& extra) {
+    EXPECT_EQ(Facets(base + (dir / name).string() + extra), 0);
+    return FileText(dir / name / "facets.log");
+  };
+  auto settings = [](int cycles, int rings) {
+    return "settings: --thorough-walls: " + std::to_string(cycles) +
+           " v-cycle(s), normal-search rounds in them down to level 0, tolerance 1, local rings " +
+           std::to_string(rings);
+  };
+  const std::string bundle = log_of("bundle", "");
+  EXPECT_NE(bundle.find(settings(1, 1)), std::string::npos) << bundle;
+  EXPECT_NE(bundle.find("stage v-cycle 1/1"), std::string::npos);
+  EXPECT_EQ(bundle.find("stage v-cycle 1/2"), std::string::npos);
+  const std::string two = log_of("two", " --v-cycles 2 --normal-search-local-rings 3");
+  EXPECT_NE(two.find(settings(2, 3)), std::string::npos) << two;
+  EXPECT_NE(two.find("stage v-cycle 2/2"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace facets
