@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -110,6 +111,8 @@ struct ReconstructArgs {
   int normal_search_local_rings = ReconstructionOptions().normal_search_local_rings;
   int v_cycle_rounds_last_level = ReconstructionOptions().v_cycle_rounds_last_level;
   bool thorough_walls = false;  // the V-cycle bundle (see --thorough-walls)
+  // Every option as given or defaulted, in the form --config reads (settings.ini).
+  std::string settings;
   double normal_search_min_cos = NormalSearchOptions().min_cos;
   double normal_search_max_here = NormalSearchOptions().max_score_here;
   double normal_search_min_angle = NormalSearchOptions().min_angle_to_views_deg;
@@ -338,15 +341,41 @@ void RunReconstruct(const ReconstructArgs& args) {
       " flagged), " + std::to_string(result.tessellation.triangles.size()) + " surface facets, sigma0 " +
       std::to_string(result.report.levels.back().window.sigma0) + " grey values, " +
       std::to_string(seconds) + " s; products in " + args.out);
+  if (!args.settings.empty()) WriteFileAtomically((out / "settings.ini").string(), args.settings);
   WriteFileAtomically((out / "facets.log").string(), log.str());
+}
+
+// Every option of the run in the form --config reads: a [reconstruct] section with the
+// options as given or defaulted, less those without a value (empty strings, flags not
+// set: the defaults anyway); `effective` replaces the values of options a bundle set.
+std::string SettingsFile(const CLI::App& sub, const std::map<std::string, std::string>& effective) {
+  std::istringstream lines(sub.config_to_str(true, false));
+  std::ostringstream file;
+  file << "# every option of a facets reconstruct run: facets reconstruct --config settings.ini --out OTHER\n"
+       << "[reconstruct]\n";
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (line.empty() || line.front() == '[') continue;
+    const size_t eq = line.find('=');
+    if (eq == std::string::npos) continue;
+    const std::string key = line.substr(0, eq);
+    const auto set = effective.find(key);
+    const std::string value = set != effective.end() ? set->second : line.substr(eq + 1);
+    if (value == "\"\"" || value == "false") continue;
+    file << key << "=" << value << "\n";
+  }
+  return file.str();
 }
 
 }  // namespace
 
 void AddReconstructCommand(CLI::App& app) {
   auto args = std::make_shared<ReconstructArgs>();
-  CLI::App* sub = app.add_subcommand("reconstruct", "reconstruct the surface from oriented images");
-  sub->set_config("--config", "", "config file with `option = value` lines; flags override it");
+  CLI::App* sub = app.add_subcommand("reconstruct", "reconstruct the surface from oriented images (--config FILE: options from a "
+                                                    "settings.ini as each run writes; the command line wins)");
+  // `facets reconstruct --config FILE`: the option belongs to the top-level app (see
+  // apps/facets_main.cc) and falls through to it.
+  sub->fallthrough();
   sub->add_option("--colmap", args->colmap, "COLMAP text model folder (cameras.txt, images.txt)");
   sub->add_option("--images", args->images, "image folder of the COLMAP model");
   sub->add_option("--project", args->project, "native project file (JSON)");
@@ -604,13 +633,20 @@ void AddReconstructCommand(CLI::App& app) {
                 "--normal-search-local-rings 1, each unless given); about 3x the time");
   sub->callback([args, sub] {
     try {
+      std::map<std::string, std::string> bundled;  // option -> value the bundle set
       if (args->thorough_walls) {
         // The bundle set by hand before: options the user gives explicitly win.
-        if (sub->count("--v-cycles") == 0) args->v_cycles = 1;
-        if (sub->count("--v-cycle-rounds-last-level") == 0) args->v_cycle_rounds_last_level = 0;
-        if (sub->count("--normal-search-tolerance") == 0) args->normal_search_tolerance = 1.0;
-        if (sub->count("--normal-search-local-rings") == 0) args->normal_search_local_rings = 1;
+        auto bundle = [&](const std::string& name, const std::string& value, auto* field, auto setting) {
+          if (sub->count("--" + name) > 0) return;
+          *field = setting;
+          bundled[name] = value;
+        };
+        bundle("v-cycles", "1", &args->v_cycles, 1);
+        bundle("v-cycle-rounds-last-level", "0", &args->v_cycle_rounds_last_level, 0);
+        bundle("normal-search-tolerance", "1", &args->normal_search_tolerance, 1.0);
+        bundle("normal-search-local-rings", "1", &args->normal_search_local_rings, 1);
       }
+      args->settings = SettingsFile(*sub, bundled);
       RunReconstruct(*args);
     } catch (const std::exception& e) {
       std::cerr << "facets reconstruct: error: " << e.what() << "\n";

@@ -2,8 +2,9 @@
 // `facets reconstruct --project FILE --out OUT_DIR [options]`
 // Reconstructs the surface and writes into OUT_DIR (engine/products.h): surface.ply,
 // surface.glb, surface.wrl (tessellated surface with the object grey values, per-node
-// sigma and views), tin.ply, ortho.tif, dsm.tif, sigma.tif, report.json, facets.log. Options can also
-// come from a config file (--config FILE, `key = value` lines); flags override it.
+// sigma and views), tin.ply, ortho.tif, dsm.tif, sigma.tif, report.json, facets.log, and
+// settings.ini: every option of the run, which `--config settings.ini` reads back (a
+// [reconstruct] section of `key = value` lines; options on the command line win).
 // Exit status 0 only when the products were written.
 #pragma once
 

@@ -191,6 +191,26 @@ TEST(ReconstructCli, ThoroughWallsSetsTheVCycleBundleAndExplicitOptionsWin) {
   const std::string two = log_of("two", " --v-cycles 2 --normal-search-local-rings 3");
   EXPECT_NE(two.find(settings(2, 3)), std::string::npos) << two;
   EXPECT_NE(two.find("stage v-cycle 2/2"), std::string::npos);
+
+  // settings.ini repeats the run through --config, bundle included (its options are
+  // written with the values the bundle set); the command line wins over the file.
+  const fs::path again = dir / "again";
+  ASSERT_EQ(Facets("reconstruct --config " + (dir / "two" / "settings.ini").string() + " --out " + again.string()), 0);
+  EXPECT_NE(FileText(again / "facets.log").find(settings(2, 3)), std::string::npos);
+  const std::string tin = FileText(dir / "two" / "tin.ply");
+  EXPECT_GT(tin.size(), 1000u);
+  EXPECT_EQ(FileText(again / "tin.ply"), tin);
+  ASSERT_EQ(Facets("reconstruct --config " + (dir / "two" / "settings.ini").string() + " --out " +
+                   (dir / "one").string() + " --v-cycles 1"),
+            0);
+  EXPECT_NE(FileText(dir / "one" / "facets.log").find(settings(1, 3)), std::string::npos);
+  // A key the command does not know is an error naming it, not silently dropped (CLI11
+  // used to ignore a config file given to the subcommand altogether).
+  std::ofstream(dir / "bad.ini") << "[reconstruct]\nlevles=2\n";
+  std::string err;
+  EXPECT_NE(Facets("reconstruct --config " + (dir / "bad.ini").string() + " --out " + (dir / "bad").string(), &err), 0);
+  EXPECT_NE(err.find("levles"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(dir / "bad" / "tin.ply"));
 }
 
 }  // namespace
