@@ -95,6 +95,7 @@ struct ReconstructArgs {
   bool normal_search_support = false;
   bool normal_search_corners = false;
   bool plane_propagation_on = false;
+  double start_step_cap = ReconstructionOptions().start_step_cap_pixels;
   bool plane_propagation_off = false;
   int plane_iterations = PlanePropagationOptions().iterations;
   double plane_source_score = PlanePropagationOptions().source_score;
@@ -246,6 +247,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.normal_search_options.support_filter = args.normal_search_support;
   options.normal_search_options.corners = args.normal_search_corners;
   if (args.plane_propagation_on) options.plane_propagation = true;
+  options.start_step_cap_pixels = args.start_step_cap;
   if (args.plane_propagation_off) options.plane_propagation = false;
   options.plane_propagation_options.iterations = args.plane_iterations;
   options.plane_propagation_options.source_score = args.plane_source_score;
@@ -550,6 +552,11 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--plane-occluder-slack", args->plane_slack,
                   "plane propagation: a borrowed plane counts an image as seeing it when no surface lies in the way "
                   "nearer than this many level pixels (at least the move)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 64.0));
+  sub->add_option("--start-step-cap", args->start_step_cap,
+                  "tie-point start: after the coarsest level, nodes at most this many of its pixels from their "
+                  "tie-point heights (0 = off)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 64.0));
   sub->add_option("--plane-max-move", args->plane_max_move,

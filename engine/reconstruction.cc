@@ -611,8 +611,29 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
         std::to_string(mesh.n_faces()) +
         " faces, ground pixel " + std::to_string(level_report.ground_pixel) + " m, break-off " +
         std::to_string(level_report.break_off) + " m");
+    // The coarsest level may not take a node further than the cap from the height its
+    // tie points gave it (ReconstructionOptions::start_step_cap_pixels).
+    const bool cap_steps = options.start_step_cap_pixels > 0.0 && level == coarsest && level != finest &&
+                           cycle == 0 && result.report.start_surface == "tiepoints";
+    std::vector<Eigen::Vector3d> start_points;
+    if (cap_steps) {
+      for (auto vh : mesh.vertices()) start_points.push_back(ToEigen(mesh.point(vh)));
+    }
     LevelAdjustment adjusted = AdjustLevelInWindows(&mesh, window_images(level), level_options(level),
                                                     options.windows, level == finest, options.progress);
+    if (cap_steps) {
+      const double cap = options.start_step_cap_pixels * gsd0 * std::pow(2.0, level);
+      int capped = 0;
+      for (auto vh : mesh.vertices()) {
+        const Eigen::Vector3d step = ToEigen(mesh.point(vh)) - start_points[vh.idx()];
+        if (step.norm() <= cap) continue;
+        mesh.set_point(vh, ToOpenMesh(start_points[vh.idx()] + step * (cap / step.norm())));
+        ++capped;
+      }
+      UpdateVertexNormals(&mesh);
+      say("  level " + std::to_string(level) + ": " + std::to_string(capped) + " nodes held within " +
+          std::to_string(cap) + " m of their tie-point heights");
+    }
     // Vertices no image saw (a sheet folded under a roof that rose) fall back to the
     // membrane spanned by the seen surface around them (mesh/local_ops.h).
     auto relax_unseen = [&]() {
