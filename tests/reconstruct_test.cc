@@ -2,6 +2,7 @@
 // on the seed gable-roof pair, scored by the evaluation against the truth.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <stdexcept>
@@ -84,6 +85,50 @@ TEST(Reconstruct, SeedGableRoofFromTiePointsWithPyramid) {
 // 0.01 m) passes the same bounds.
 TEST(Reconstruct, SeedGableRoofWithTheBreakOffInGroundPixels) {
   ReconstructSeedGable(0.06, "facets_reconstruct_seed_gable_gsd");
+}
+
+// ReconstructionOptions::start_step_cap_pixels (`--start-step-cap`): with the tie-point
+// start no node of the coarsest level ends further than the cap from where the start put
+// it. The start is read from a run with a vanishing cap; the capped run's nodes all lie
+// within the cap of it, some of them on it, and without a cap some lie beyond.
+TEST(Reconstruct, CoarsestLevelStepsStayWithinTheCapOfTheTiePointStart) {
+  const RenderedScene rendered =
+      RenderAndRead("scenes/data/seed_gable_parallel.json", testing::TempDir() + "/facets_reconstruct_step_cap");
+  auto coarsest_tin = [&](double cap_pixels, double* ground_pixel) {
+    ReconstructionOptions options;
+    options.levels = 3;
+    options.finest_level = 1;
+    options.start_step_cap_pixels = cap_pixels;
+    std::vector<Eigen::Vector3d> points;
+    options.level_done = [&](int level, const TinMesh& mesh) {
+      if (level != 2) return;
+      for (auto vh : mesh.vertices()) points.push_back(ToEigen(mesh.point(vh)));
+    };
+    const Reconstruction r = Reconstruct(rendered.block, options);
+    EXPECT_EQ(r.report.start_surface, "tiepoints");
+    *ground_pixel = r.report.levels.front().ground_pixel;
+    return points;
+  };
+  double pixel = 0.0;
+  const std::vector<Eigen::Vector3d> start = coarsest_tin(1e-9, &pixel);
+  const double cap = 0.25;  // level pixels
+  const std::vector<Eigen::Vector3d> capped = coarsest_tin(cap, &pixel);
+  const std::vector<Eigen::Vector3d> free = coarsest_tin(0.0, &pixel);
+  ASSERT_EQ(capped.size(), start.size());
+  ASSERT_EQ(free.size(), start.size());
+  double capped_max = 0.0, free_max = 0.0;
+  int on_cap = 0;
+  for (size_t v = 0; v < start.size(); ++v) {
+    const double d = (capped[v] - start[v]).norm();
+    capped_max = std::max(capped_max, d);
+    on_cap += d > 0.999 * cap * pixel;
+    free_max = std::max(free_max, (free[v] - start[v]).norm());
+  }
+  std::cout << start.size() << " coarsest nodes, level pixel " << pixel << " m: capped run at most " << capped_max
+            << " m from the start (" << on_cap << " on the cap), uncapped " << free_max << " m\n";
+  EXPECT_LE(capped_max, cap * pixel * (1 + 1e-9));
+  EXPECT_GT(on_cap, 0);
+  EXPECT_GT(free_max, cap * pixel);
 }
 
 // ReconstructionOptions::finest_level (`facets reconstruct --finest-level`): 3 pyramid
