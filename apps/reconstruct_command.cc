@@ -95,8 +95,8 @@ struct ReconstructArgs {
   bool normal_search_support = false;
   bool normal_search_corners = false;
   bool plane_propagation_on = false;
-  double start_step_cap = ReconstructionOptions().start_step_cap_pixels;
   bool plane_propagation_off = false;
+  double start_step_cap = ReconstructionOptions().start_step_cap_pixels;
   int plane_iterations = PlanePropagationOptions().iterations;
   double plane_source_score = PlanePropagationOptions().source_score;
   double plane_max_move = PlanePropagationOptions().max_move_pixels;
@@ -247,8 +247,8 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.normal_search_options.support_filter = args.normal_search_support;
   options.normal_search_options.corners = args.normal_search_corners;
   if (args.plane_propagation_on) options.plane_propagation = true;
-  options.start_step_cap_pixels = args.start_step_cap;
   if (args.plane_propagation_off) options.plane_propagation = false;
+  options.start_step_cap_pixels = args.start_step_cap;
   options.plane_propagation_options.iterations = args.plane_iterations;
   options.plane_propagation_options.source_score = args.plane_source_score;
   options.plane_propagation_options.max_move_pixels = args.plane_max_move;

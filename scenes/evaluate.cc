@@ -426,7 +426,7 @@ EvaluationReport Evaluate(const TruthScene& truth, const MeshData& reconstructio
   // images; a drape hanging before a wall no two images see is not one of them).
   std::map<int, std::vector<double>> accuracy;  // label -> distances
   std::map<int, std::vector<double>> accuracy_multi, accuracy_few;
-  std::vector<double> accuracy_all;
+  std::vector<double> accuracy_all, accuracy_multi_all, accuracy_few_all;
   {
     const MeshDistance to_truth(truth.mesh);
     std::vector<Eigen::Vector3d> samples =
@@ -474,6 +474,7 @@ EvaluationReport Evaluate(const TruthScene& truth, const MeshData& reconstructio
     for (size_t i = 0; i < samples.size(); ++i) {
       accuracy[label[i]].push_back(distance[i]);
       (views[i] >= 2 ? accuracy_multi : accuracy_few)[label[i]].push_back(distance[i]);
+      (views[i] >= 2 ? accuracy_multi_all : accuracy_few_all).push_back(distance[i]);
     }
     accuracy_all = distance;
   }
@@ -541,13 +542,8 @@ EvaluationReport Evaluate(const TruthScene& truth, const MeshData& reconstructio
   all.label = -1;
   all.name = "all";
   all.accuracy = ComputeStats(accuracy_all);
-  {
-    std::vector<double> multi, few;
-    for (const auto& [label, d] : accuracy_multi) multi.insert(multi.end(), d.begin(), d.end());
-    for (const auto& [label, d] : accuracy_few) few.insert(few.end(), d.begin(), d.end());
-    all.accuracy_multi_view = ComputeStats(multi);
-    all.accuracy_few_views = ComputeStats(few);
-  }
+  all.accuracy_multi_view = ComputeStats(accuracy_multi_all);
+  all.accuracy_few_views = ComputeStats(accuracy_few_all);
   all.completeness = ComputeCompleteness(seen_all, thresholds_m);
   all.multi_view = ComputeCompleteness(multi_all, thresholds_m);
   all.few_views = ComputeCompleteness(few_all, thresholds_m);
