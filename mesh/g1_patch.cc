@@ -1,5 +1,6 @@
 #include "mesh/g1_patch.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace facets {
@@ -74,6 +75,17 @@ std::array<Eigen::Vector3d, 4> HermiteCoefficients(const Eigen::Vector3d& p0,
 
 // Below this sum of squared barycentric products the point is a vertex (0/0 weights).
 constexpr double kCornerEps = 1e-200;
+
+// At a corner, or within rounding of it (the two other barycentrics below 1e-12 in
+// magnitude, possibly of opposite signs a hair outside the triangle): the blend's
+// weights and derivatives are 0/0 or rounding noise there.
+bool AtCorner(double b0, double b1, double b2) {
+  const double q0 = b1 * b2, q1 = b2 * b0, q2 = b0 * b1;
+  if (q0 * q0 + q1 * q1 + q2 * q2 < kCornerEps) return true;
+  const double a0 = std::abs(b0), a1 = std::abs(b1), a2 = std::abs(b2);
+  const double middle = std::max(std::min(a0, a1), std::min(std::max(a0, a1), a2));
+  return middle < 1e-12;
+}
 
 int CornerIndex(double b0, double b1, double b2) {
   if (b1 >= b0 && b1 >= b2) return 1;
@@ -160,6 +172,13 @@ void G1Patch::EvaluateT(const T& b1, const T& b2, T out[3]) const {
     }
     const int j = (i + 1) % 3, k = (i + 2) % 3;
     const T u = b[j] + b[k];
+    if (std::abs(Val(u)) <= 1e-9 * (std::abs(Val(b[j])) + std::abs(Val(b[k])))) {
+      // On the line b_j = -b_k through vertex i (a hair outside the triangle next to
+      // it: b_i = 1, b_j = -b_k ~ 1e-16 after rounding) s = b_k / u is 0/0; P_i is X_i
+      // there whatever s, and its weight (b_j b_k)^2 is negligible against the others.
+      sum = sum + wq[i] * Lift<T>(x_[i]);
+      continue;
+    }
     const T s = b[k] / u;
     const auto& c = edge_[i].coefficients();
     // Boundary point S = C(s), tangent C'(s), normal field m(s).
@@ -189,8 +208,7 @@ void G1Patch::EvaluateT(const T& b1, const T& b2, T out[3]) const {
 
 Eigen::Vector3d G1Patch::Evaluate(double b1, double b2) const {
   const double b0 = 1.0 - b1 - b2;
-  const double q0 = b1 * b2, q1 = b2 * b0, q2 = b0 * b1;
-  if (q0 * q0 + q1 * q1 + q2 * q2 < kCornerEps) return x_[CornerIndex(b0, b1, b2)];
+  if (AtCorner(b0, b1, b2)) return x_[CornerIndex(b0, b1, b2)];
   double out[3];
   EvaluateT<double>(b1, b2, out);
   return {out[0], out[1], out[2]};
@@ -199,8 +217,7 @@ Eigen::Vector3d G1Patch::Evaluate(double b1, double b2) const {
 SurfacePoint G1Patch::EvaluateWithDerivatives(double b1, double b2) const {
   SurfacePoint r;
   const double b0 = 1.0 - b1 - b2;
-  const double q0 = b1 * b2, q1 = b2 * b0, q2 = b0 * b1;
-  if (q0 * q0 + q1 * q1 + q2 * q2 < kCornerEps) {
+  if (AtCorner(b0, b1, b2)) {
     // At vertex i the surface's differential is given by the two boundary-curve
     // tangents: dX = sum_l T_il db_l. d/db1 is db = (-1, 1, 0), d/db2 is (-1, 0, 1).
     const int i = CornerIndex(b0, b1, b2);

@@ -42,6 +42,26 @@ TEST(G1Patch, InterpolatesVerticesAndNormals) {
   EXPECT_LT(max_near, 1e-5);
 }
 
+// A hair outside a corner, where rounding leaves b_i = 1 and b_j = -b_k ~ 1e-16 (the
+// tangential smoothing located a vertex at its own ring's centroid like this, block
+// scene with 5-pixel edges): the side-vertex parameter of P_i was 0/0 and the point NaN.
+TEST(G1Patch, FiniteAHairOutsideACorner) {
+  const G1Patch patch = SphereTriangle();
+  for (const double tiny : {2.1837766987359469e-16, 1e-17, 3e-300}) {
+    for (int i = 0; i < 3; ++i) {
+      // b_i = 1 (as evaluated: b0 = 1 - b1 - b2), the two others +-tiny.
+      const double b1 = i == 1 ? 1.0 : (i == 0 ? tiny : -tiny);
+      const double b2 = i == 2 ? 1.0 : (i == 0 ? -tiny : tiny);
+      const SurfacePoint sp = patch.EvaluateWithDerivatives(b1, b2);
+      EXPECT_TRUE(sp.point.allFinite()) << "corner " << i << ", " << tiny;
+      EXPECT_TRUE(sp.normal.allFinite()) << "corner " << i << ", " << tiny;
+      EXPECT_LT((sp.point - patch.vertex(i)).norm(), 1e-12) << "corner " << i << ", " << tiny;
+      EXPECT_LT((sp.normal - patch.vertex_normal(i)).norm(), 1e-6) << "corner " << i << ", " << tiny;
+      EXPECT_LT((patch.Evaluate(b1, b2) - patch.vertex(i)).norm(), 1e-12) << "corner " << i << ", " << tiny;
+    }
+  }
+}
+
 TEST(G1Patch, ReproducesPlane) {
   const Vector3d n = Vector3d(0.3, -0.5, 0.8).normalized();
   Vector3d e1 = n.cross(Vector3d::UnitX()).normalized(), e2 = n.cross(e1);

@@ -341,6 +341,11 @@ SmoothingReport TangentialSmooth(TinMesh* mesh, const SmoothingOptions& options)
         }
         if (!found) ++report.off_surface;
       }
+      if (!moved.allFinite() || !(moved_normal.norm() > 0.5)) {
+        // A degenerate patch (a folded vertex: tangents parallel, no normal): stay.
+        moved = p;
+        moved_normal = n;
+      }
       new_point[v.idx()] = moved;
       new_normal[v.idx()] = moved_normal;
       const double move = (moved - p).norm();
