@@ -150,7 +150,7 @@ void RunReconstruct(const ReconstructArgs& args) {
     std::ostringstream bundle;
     bundle << "settings: --thorough-walls: " << args.v_cycles << " v-cycle(s), normal-search rounds in them down to level "
            << args.v_cycle_rounds_last_level << ", tolerance " << args.normal_search_tolerance << ", local rings "
-           << args.normal_search_local_rings;
+           << args.normal_search_local_rings << ", grey facets of " << args.facet_pixels << " pixels";
     say(bundle.str());
   }
   ImageBlock block;
@@ -635,9 +635,9 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_flag("--no-preview", args->no_preview, "do not write preview.png");
   sub->add_flag("--keep-levels", args->keep_levels, "also write each level's TIN as levels/level_K.ply (K = pyramid level)");
   sub->add_flag("--thorough-walls", args->thorough_walls,
-                "walls (issue 7): one V-cycle with normal-search rounds down to level 0, re-adjusted locally "
-                "(--v-cycles 1 --v-cycle-rounds-last-level 0 --normal-search-tolerance 1 "
-                "--normal-search-local-rings 1, each unless given); about 3x the time");
+                "walls (issue 7): 1.5-pixel facets and one V-cycle with normal-search rounds down to level 0, "
+                "re-adjusted locally (--facet-pixels 1.5 --v-cycles 1 --v-cycle-rounds-last-level 0 "
+                "--normal-search-tolerance 1 --normal-search-local-rings 1, each unless given); about 7x the time");
   sub->callback([args, sub] {
     try {
       std::map<std::string, std::string> bundled;  // option -> value the bundle set
@@ -652,6 +652,7 @@ void AddReconstructCommand(CLI::App& app) {
         bundle("v-cycle-rounds-last-level", "0", &args->v_cycle_rounds_last_level, 0);
         bundle("normal-search-tolerance", "1", &args->normal_search_tolerance, 1.0);
         bundle("normal-search-local-rings", "1", &args->normal_search_local_rings, 1);
+        bundle("facet-pixels", "1.5", &args->facet_pixels, 1.5);
       }
       args->settings = SettingsFile(*sub, bundled);
       RunReconstruct(*args);

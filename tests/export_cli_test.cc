@@ -179,31 +179,31 @@ TEST(ReconstructCli, ThoroughWallsSetsTheVCycleBundleAndExplicitOptionsWin) {
     EXPECT_EQ(Facets(base + (dir / name).string() + extra), 0);
     return FileText(dir / name / "facets.log");
   };
-  auto settings = [](int cycles, int rings) {
+  auto settings = [](int cycles, int rings, const std::string& facet_pixels = "1.5") {
     return "settings: --thorough-walls: " + std::to_string(cycles) +
            " v-cycle(s), normal-search rounds in them down to level 0, tolerance 1, local rings " +
-           std::to_string(rings);
+           std::to_string(rings) + ", grey facets of " + facet_pixels + " pixels";
   };
   const std::string bundle = log_of("bundle", "");
   EXPECT_NE(bundle.find(settings(1, 1)), std::string::npos) << bundle;
   EXPECT_NE(bundle.find("stage v-cycle 1/1"), std::string::npos);
   EXPECT_EQ(bundle.find("stage v-cycle 1/2"), std::string::npos);
-  const std::string two = log_of("two", " --v-cycles 2 --normal-search-local-rings 3");
-  EXPECT_NE(two.find(settings(2, 3)), std::string::npos) << two;
+  const std::string two = log_of("two", " --v-cycles 2 --normal-search-local-rings 3 --facet-pixels 2");
+  EXPECT_NE(two.find(settings(2, 3, "2")), std::string::npos) << two;
   EXPECT_NE(two.find("stage v-cycle 2/2"), std::string::npos);
 
   // settings.ini repeats the run through --config, bundle included (its options are
   // written with the values the bundle set); the command line wins over the file.
   const fs::path again = dir / "again";
   ASSERT_EQ(Facets("reconstruct --config " + (dir / "two" / "settings.ini").string() + " --out " + again.string()), 0);
-  EXPECT_NE(FileText(again / "facets.log").find(settings(2, 3)), std::string::npos);
+  EXPECT_NE(FileText(again / "facets.log").find(settings(2, 3, "2")), std::string::npos);
   const std::string tin = FileText(dir / "two" / "tin.ply");
   EXPECT_GT(tin.size(), 1000u);
   EXPECT_EQ(FileText(again / "tin.ply"), tin);
   ASSERT_EQ(Facets("reconstruct --config " + (dir / "two" / "settings.ini").string() + " --out " +
                    (dir / "one").string() + " --v-cycles 1"),
             0);
-  EXPECT_NE(FileText(dir / "one" / "facets.log").find(settings(1, 3)), std::string::npos);
+  EXPECT_NE(FileText(dir / "one" / "facets.log").find(settings(1, 3, "2")), std::string::npos);
   // A key the command does not know is an error naming it, not silently dropped (CLI11
   // used to ignore a config file given to the subcommand altogether).
   std::ofstream(dir / "bad.ini") << "[reconstruct]\nlevles=2\n";
