@@ -8,6 +8,7 @@
 // folders give a clear error and exit status 1.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 #include <tiny_gltf.h>
 
 #include <cstdlib>
@@ -27,9 +28,12 @@ namespace facets {
 namespace {
 namespace fs = std::filesystem;
 
-// Runs the facets CLI with `args`; returns the exit status, stderr in *err.
+// Runs the facets CLI with `args`; returns the exit status, stderr in *err. The stderr
+// file is per process: ctest -j runs this file's tests side by side, and with one shared
+// file a test read another's (empty) stderr (CI, session 18).
 int Facets(const std::string& args, std::string* err = nullptr) {
-  const std::string err_file = testing::TempDir() + "/facets_export_cli_stderr.txt";
+  const std::string err_file =
+      testing::TempDir() + "/facets_export_cli_stderr_" + std::to_string(getpid()) + ".txt";
   const std::string command = std::string(FACETS_CLI) + " " + args + " > /dev/null 2> " + err_file;
   const int status = std::system(command.c_str());
   std::ifstream in(err_file);
