@@ -90,6 +90,8 @@ struct ReconstructArgs {
   int wall_passes = ReconstructionOptions().wall_passes;
   int tangential_smoothing = ReconstructionOptions().tangential_smoothing;
   int straighten_rounds = ReconstructionOptions().straighten_rounds;
+  int straighten_local_rings = ReconstructionOptions().straighten_local_rings;
+  double straighten_tolerance = ReconstructionOptions().straighten_tolerance;
   bool normal_search_on = false, normal_search_off = false;
   int normal_search_last_level = ReconstructionOptions().normal_search_last_level;
   bool normal_search_support = false;
@@ -241,6 +243,8 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.wall_passes = args.wall_passes;
   options.tangential_smoothing = args.tangential_smoothing;
   options.straighten_rounds = args.straighten_rounds;
+  options.straighten_local_rings = args.straighten_local_rings;
+  options.straighten_tolerance = args.straighten_tolerance;
   if (args.normal_search_on) options.normal_search = true;
   if (args.normal_search_off) options.normal_search = false;
   options.normal_search_last_level = args.normal_search_last_level;
@@ -491,9 +495,18 @@ void AddReconstructCommand(CLI::App& app) {
       ->check(CLI::Range(0, 10));
   sub->add_option("--straighten-rounds", args->straighten_rounds,
                   "per level: put straight crease chains on their line and adjust again, kept while sigma0 "
-                  "drops, at most this often (0 = off)")
+                  "does not rise (--straighten-tolerance), at most this often (0 = off)")
       ->capture_default_str()
       ->check(CLI::Range(0, 10));
+  sub->add_option("--straighten-local-rings", args->straighten_local_rings,
+                  "straightening: adjust again only the windows over the faces within this many edge rings of "
+                  "the vertices it moved, judged by those windows' sigma0 (-1 = the whole level)")
+      ->capture_default_str()
+      ->check(CLI::Range(-1, 50));
+  sub->add_option("--straighten-tolerance", args->straighten_tolerance,
+                  "straightening: kept unless sigma0 rises by more than this share (0 = only when it drops)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   sub->add_flag("--normal-search", args->normal_search_on,
                 "before each finer level: steep vertices (walls) search along their normals for the offset where the "
                 "images agree best, so walls a coarser level left several pixels off come back (default: on for "

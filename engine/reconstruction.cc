@@ -177,6 +177,8 @@ void ReconstructionOptions::Check() const {
   if (straighten_rounds < 0 || straighten_rounds > 10) fail("straighten_rounds must lie in 0..10");
   if (v_cycles < 0 || v_cycles > 10) fail("v_cycles must lie in 0..10");
   if (normal_search_local_rings < -1) fail("normal_search_local_rings must be >= -1");
+  if (straighten_local_rings < -1) fail("straighten_local_rings must be >= -1");
+  if (!(straighten_tolerance >= 0.0 && straighten_tolerance <= 1.0)) fail("straighten_tolerance must lie in 0..1");
   if (v_cycle_rounds_last_level < -1) fail("v_cycle_rounds_last_level must be >= -1");
   if (v_cycles > 0 && v_cycle_level < 1) fail("v_cycle_level must be >= 1 (a level above the finest)");
   if (!(v_cycle_robust_k >= 0.0)) fail("v_cycle_robust_k must be >= 0");
@@ -680,6 +682,35 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       level_report.wall_passes.push_back(
           {split.splits, split.flips, static_cast<int>(mesh.n_faces()), adjusted.summary.sigma0});
     }
+    // After vertices moved (normal search, straightening): the level adjusted again, the
+    // whole of it (local_rings -1, judged by the level's sigma0) or only the windows
+    // within local_rings edge rings of the moved vertices (judged by their own sigma0
+    // before and after, engine/local_readjustment.h). done = false: no window to run.
+    struct Readjusted {
+      LevelAdjustment level;
+      double was_sigma0 = 0.0, now_sigma0 = 0.0;
+      int local_windows = 0;  // 0: the whole level was adjusted again
+      bool done = true;
+    };
+    auto readjust = [&](const TinMesh& before, int local_rings) {
+      Readjusted r;
+      r.was_sigma0 = adjusted.summary.sigma0;
+      if (local_rings >= 0) {
+        LocalReadjustment local = ReadjustAroundMovedVertices(&mesh, before, adjusted, local_rings, window_images(level),
+                                                              level_options(level), options.windows, level == finest,
+                                                              options.progress);
+        r.done = local.windows > 0;
+        r.level = std::move(local.level);
+        r.was_sigma0 = local.sigma0_before;
+        r.now_sigma0 = local.sigma0_after;
+        r.local_windows = local.windows;
+      } else {
+        r.level = AdjustLevelInWindows(&mesh, window_images(level), level_options(level), options.windows,
+                                       level == finest, options.progress);
+        r.now_sigma0 = r.level.summary.sigma0;
+      }
+      return r;
+    };
     // Walls the adjustment left beyond its pull-in: search along the normals again and
     // adjust again, kept only when the level then fits better.
     const int rounds_last_level = cycle > 0 && options.v_cycle_rounds_last_level >= 0
@@ -691,26 +722,11 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       TinMesh before = mesh;
       const NormalSearchReport ns = search_normals();
       if (ns.moved == 0) break;
-      LevelAdjustment again;
-      // The round is judged on these (the whole level's, or the local windows').
-      double was_sigma0 = adjusted.summary.sigma0;
-      double now_sigma0 = 0.0;
-      int local_windows = 0;  // 0: the whole level was adjusted again
-      if (options.normal_search_local_rings >= 0) {
-        LocalReadjustment local =
-            ReadjustAroundMovedVertices(&mesh, before, adjusted, options.normal_search_local_rings,
-                                        window_images(level), level_options(level), options.windows,
-                                        level == finest, options.progress);
-        if (local.windows == 0) break;
-        again = std::move(local.level);
-        was_sigma0 = local.sigma0_before;
-        now_sigma0 = local.sigma0_after;
-        local_windows = local.windows;
-      } else {
-        again = AdjustLevelInWindows(&mesh, window_images(level), level_options(level), options.windows,
-                                     level == finest, options.progress);
-        now_sigma0 = again.summary.sigma0;
-      }
+      Readjusted re = readjust(before, options.normal_search_local_rings);
+      if (!re.done) break;
+      LevelAdjustment& again = re.level;
+      const double was_sigma0 = re.was_sigma0, now_sigma0 = re.now_sigma0;
+      const int local_windows = re.local_windows;
       const bool better = now_sigma0 < was_sigma0 * (1.0 + options.normal_search_tolerance);
       say("  level " + std::to_string(level) + " normal search round " + std::to_string(round + 1) + ": " +
           std::to_string(ns.moved) + " moved (median " + std::to_string(ns.median_move) + " m); sigma0 " +
@@ -733,14 +749,32 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       TinMesh before = mesh;
       const StraightenReport straight = StraightenCreaseChains(
           &mesh, DetectCreaseEdges(mesh, adjustment_options.crease_angle_deg, adjustment_options.rounded_ridges));
-      if (straight.moved == 0) break;
-      LevelAdjustment again = AdjustLevelInWindows(&mesh, window_images(level), level_options(level),
-                                                   options.windows, level == finest, options.progress);
-      const bool better = again.summary.sigma0 < adjusted.summary.sigma0;
+      if (straight.moved == 0) {
+        // Why nothing moved, so that a run's log tells (issue 7: eaves next to crumpled walls).
+        if (straight.sets > 0) {
+          say("  level " + std::to_string(level) + " straightening: " + std::to_string(straight.sets) +
+              " crease sets, " + std::to_string(straight.lines) + " straight runs, none moved (" +
+              std::to_string(straight.sides_not_planar) + " with a side not planar, " +
+              std::to_string(straight.sides_not_meeting) + " with sides not meeting on the run, " +
+              std::to_string(straight.too_small + straight.too_short) + " too short, " +
+              std::to_string(straight.rejected) + " undone for folds)");
+        }
+        break;
+      }
+      Readjusted re = readjust(before, options.straighten_local_rings);
+      if (!re.done) {
+        mesh = std::move(before);
+        break;
+      }
+      LevelAdjustment& again = re.level;
+      const double was_sigma0 = re.was_sigma0, now_sigma0 = re.now_sigma0;
+      const int local_windows = re.local_windows;
+      const bool better = now_sigma0 < was_sigma0 * (1.0 + options.straighten_tolerance);
       say("  level " + std::to_string(level) + " straightening " + std::to_string(round + 1) + ": " +
           std::to_string(straight.components) + " straight crease lines, " + std::to_string(straight.moved) +
           " vertices put on them (max " + std::to_string(straight.max_move) + " m); sigma0 " +
-          std::to_string(again.summary.sigma0) + " against " + std::to_string(adjusted.summary.sigma0) +
+          std::to_string(now_sigma0) + " against " + std::to_string(was_sigma0) +
+          (local_windows > 0 ? " (" + std::to_string(local_windows) + " local windows)" : "") +
           (better ? ", kept" : ", dropped"));
       if (!better) {
         mesh = std::move(before);

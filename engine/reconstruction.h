@@ -117,9 +117,21 @@ struct ReconstructionOptions {
   bool flatten_crossing_facets = true;
   // After a level's adjustment, chains of vertices along a straight crease (a ridge
   // skew to the grid, a zigzag of edges) are put on the crease's line
-  // (StraightenCreaseChains, mesh/creases.h) and the level runs again, kept only when
-  // its sigma0 is lower; at most this many rounds (0 = off). Off for closed starts.
+  // (StraightenCreaseChains, mesh/creases.h) and the level runs again around them, kept
+  // unless its sigma0 rises (below); at most this many rounds (0 = off). Off for closed
+  // starts.
   int straighten_rounds = 3;
+  // The straightening's run of the level again: only the windows over the faces within
+  // this many edge rings of the vertices it moved, judged by those windows' sigma0
+  // (engine/local_readjustment.h; -1 = the whole level, judged by the level's). Local
+  // costs a few windows (block A: 4 a round, three rounds 5.5 s) where the whole level
+  // costs 25-40 s a round.
+  int straighten_local_rings = 2;
+  // A straightening is kept unless sigma0 rises by more than this share: the fit hardly
+  // sees a ridge or eave a few centimetres off among the windows' other observations
+  // (block A, issue 7: +0.2 % in the 4 windows with the gable ridges 3x closer to the
+  // truth; roof median 0.110 -> 0.086 GSD).
+  double straighten_tolerance = 0.01;
   // Before each level below the coarsest (after its subdivision): vertices search along
   // their normals for the offset where the images agree best (engine/normal_search.h),
   // so walls and eaves a coarser level left several pixels off start within the

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <random>
 
 namespace facets {
 namespace {
@@ -226,9 +227,60 @@ std::vector<G1Patch> BuildPatches(const TinMesh& mesh, const CornerNormals& corn
   return patches;
 }
 
-}  // namespace facets
+namespace {
 
-namespace facets {
+// Straight runs of a set of crease vertices: lines through two of its vertices (drawn
+// at random with a fixed seed, so runs are reproducible), the one with the most
+// vertices within max_offset edges in one stretch without a gap of more than 1.5
+// edges; its vertices leave the set and the next line is sought, until no stretch
+// spans min_edges edges. A straight set gives one run.
+std::vector<std::vector<int>> StraightRuns(const TinMesh& mesh, std::vector<int> remaining, double h,
+                                           double max_offset, int min_edges) {
+  std::vector<std::vector<int>> runs;
+  std::mt19937 random(12345);
+  auto point = [&](int v) { return ToEigen(mesh.point(mesh.vertex_handle(v))); };
+  const int trials = 200;
+  while (remaining.size() >= 3) {
+    std::vector<int> best;
+    double best_span = 0.0;
+    std::uniform_int_distribution<size_t> pick(0, remaining.size() - 1);
+    std::vector<std::pair<double, int>> on_line;
+    for (int trial = 0; trial < trials; ++trial) {
+      const Eigen::Vector3d a = point(remaining[pick(random)]), b = point(remaining[pick(random)]);
+      const double length = (b - a).norm();
+      if (length < 2.0 * h) continue;
+      const Eigen::Vector3d dir = (b - a) / length;
+      on_line.clear();
+      for (int v : remaining) {
+        const Eigen::Vector3d d = point(v) - a;
+        if ((d - d.dot(dir) * dir).norm() <= max_offset * h) on_line.emplace_back(d.dot(dir), v);
+      }
+      if (on_line.size() <= best.size()) continue;
+      std::sort(on_line.begin(), on_line.end());
+      size_t begin = 0;
+      for (size_t i = 1; i <= on_line.size(); ++i) {
+        if (i < on_line.size() && on_line[i].first - on_line[i - 1].first <= 1.5 * h) continue;
+        if (i - begin > best.size()) {
+          best.clear();
+          for (size_t k = begin; k < i; ++k) best.push_back(on_line[k].second);
+          best_span = on_line[i - 1].first - on_line[begin].first;
+        }
+        begin = i;
+      }
+    }
+    if (best.size() < 3 || best_span < min_edges * h * 0.9) break;
+    std::vector<int> rest;
+    std::sort(best.begin(), best.end());
+    for (int v : remaining) {
+      if (!std::binary_search(best.begin(), best.end(), v)) rest.push_back(v);
+    }
+    remaining = std::move(rest);
+    runs.push_back(std::move(best));
+  }
+  return runs;
+}
+
+}  // namespace
 
 StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& crease_edge, int min_edges,
                                         double max_offset) {
@@ -268,12 +320,32 @@ StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& 
     ++edge_count[root];
   }
   auto point = [&](int v) { return ToEigen(mesh->point(mesh->vertex_handle(v))); };
+  // A building's creases form one web (eaves, ridges, wall corners joined at their
+  // ends): it is cut into straight runs first, and each run is a candidate line.
+  struct Candidate {
+    std::vector<int> vertices;
+    double h;
+    bool whole_set;  // the set is one straight run
+  };
+  std::vector<Candidate> candidates;
   for (int root = 0; root < nv; ++root) {
-    if (edge_count[root] < min_edges) continue;
+    if (members[root].empty()) continue;
+    ++report.sets;
+    if (edge_count[root] < min_edges) {
+      ++report.too_small;
+      continue;
+    }
     const double h = edge_sum[root] / edge_count[root];
-    // Least-squares line of the component's vertices; vertices farther than the offset
-    // (a branch, the other arm of a corner) are dropped and the line refitted.
-    std::vector<int> kept = members[root];
+    std::vector<std::vector<int>> runs = StraightRuns(*mesh, members[root], h, max_offset, min_edges);
+    const bool whole = runs.size() == 1 && runs[0].size() == members[root].size();
+    for (std::vector<int>& run : runs) candidates.push_back({std::move(run), h, whole});
+  }
+  report.lines = static_cast<int>(candidates.size());
+  for (const Candidate& candidate : candidates) {
+    const double h = candidate.h;
+    // Least-squares line of the run's vertices; vertices farther than the offset are
+    // dropped and the line refitted.
+    std::vector<int> kept = candidate.vertices;
     Eigen::Vector3d centre, dir;
     for (int round = 0; round < 3; ++round) {
       if (kept.size() < 3) break;
@@ -292,7 +364,10 @@ StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& 
       if (next.size() == kept.size()) break;
       kept = std::move(next);
     }
-    if (kept.size() < 3) continue;
+    if (kept.size() < 3) {
+      ++report.too_small;
+      continue;
+    }
     auto along = [&](int v) { return (point(v) - centre).dot(dir); };
     auto off = [&](int v) {
       const Eigen::Vector3d d = point(v) - centre;
@@ -304,7 +379,10 @@ StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& 
       if (along(v) < along(first)) first = v;
       t_max = std::max(t_max, along(v));
     }
-    if (t_max - along(first) < min_edges * h * 0.9) continue;
+    if (t_max - along(first) < min_edges * h * 0.9) {
+      ++report.too_short;
+      continue;
+    }
     const double t_min = along(first);
     // The vertices of a zigzag lie mostly on one side of the true crease, so their line
     // is off by up to half an edge: the line is the intersection of the planes fitted to
@@ -314,31 +392,61 @@ StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& 
     for (int v : kept) mean_normal += ToEigen(mesh->normal(mesh->vertex_handle(v)));
     const Eigen::Vector3d side_axis = mean_normal.cross(dir).normalized();
     std::vector<Eigen::Vector3d> side_points[2];
+    // Along the whole line; for a run cut from a web not within an edge of its ends,
+    // where the other creases of the web and their faces begin.
+    const double side_from = candidate.whole_set ? t_min - 0.5 * h : t_min + h;
+    const double side_to = candidate.whole_set ? t_max + 0.5 * h : t_max - h;
     for (auto vh : mesh->vertices()) {
       const Eigen::Vector3d d = ToEigen(mesh->point(vh)) - centre;
       const double t = d.dot(dir), s = d.dot(side_axis);
-      if (t < t_min - 0.5 * h || t > t_max + 0.5 * h || std::abs(s) < side_near * h || std::abs(s) > side_far * h) continue;
+      if (t < side_from || t > side_to || std::abs(s) < side_near * h || std::abs(s) > side_far * h) continue;
+      // Near the crease only: the slab of side distances also holds surface far along
+      // the normal (the ground under an eave, the roof above a wall's foot).
+      if ((d - t * dir).norm() > 1.5 * side_far * h) continue;
       side_points[s > 0.0 ? 1 : 0].push_back(d);
     }
     bool planes = side_points[0].size() >= 4 && side_points[1].size() >= 4;
     Eigen::Vector3d plane_normal[2], plane_centre[2];
     for (int k = 0; k < 2 && planes; ++k) {
-      plane_centre[k].setZero();
-      for (const auto& q : side_points[k]) plane_centre[k] += q;
-      plane_centre[k] /= static_cast<double>(side_points[k].size());
-      Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-      for (const auto& q : side_points[k]) scatter += (q - plane_centre[k]) * (q - plane_centre[k]).transpose();
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
-      plane_normal[k] = eig.eigenvectors().col(0);
-      // Planar sides only: rms distance to the plane within a tenth of an edge.
-      planes = std::sqrt(std::max(0.0, eig.eigenvalues()(0)) / side_points[k].size()) <= 0.1 * h;
+      // Planar sides only: rms distance to the plane within a tenth of an edge, after
+      // points off it (another roof face past a hip line's end, a wall below an eave)
+      // are dropped, as long as three quarters of them stay.
+      std::vector<Eigen::Vector3d> on_plane = side_points[k];
+      double rms = 0.0;
+      for (int round = 0; round < 3; ++round) {
+        plane_centre[k].setZero();
+        for (const auto& q : on_plane) plane_centre[k] += q;
+        plane_centre[k] /= static_cast<double>(on_plane.size());
+        Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+        for (const auto& q : on_plane) scatter += (q - plane_centre[k]) * (q - plane_centre[k]).transpose();
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
+        plane_normal[k] = eig.eigenvectors().col(0);
+        rms = std::sqrt(std::max(0.0, eig.eigenvalues()(0)) / on_plane.size());
+        if (rms <= 0.1 * h) break;
+        std::vector<Eigen::Vector3d> closer;
+        for (const auto& q : on_plane) {
+          if (std::abs((q - plane_centre[k]).dot(plane_normal[k])) <= std::max(2.0 * rms, 0.1 * h)) closer.push_back(q);
+        }
+        if (closer.size() < 4 || closer.size() == on_plane.size() || 4 * closer.size() < 3 * side_points[k].size()) break;
+        on_plane = std::move(closer);
+      }
+      planes = rms <= 0.1 * h;
     }
-    if (!planes) continue;
+    if (!planes) {
+      ++report.sides_not_planar;
+      continue;
+    }
     Eigen::Vector3d line_dir = plane_normal[0].cross(plane_normal[1]);
-    if (line_dir.norm() < std::sin(crease_min_deg * M_PI / 180.0)) continue;
+    if (line_dir.norm() < std::sin(crease_min_deg * M_PI / 180.0)) {
+      ++report.sides_not_meeting;
+      continue;
+    }
     line_dir.normalize();
     if (line_dir.dot(dir) < 0.0) line_dir = -line_dir;
-    if (line_dir.dot(dir) < std::cos(20.0 * M_PI / 180.0)) continue;
+    if (line_dir.dot(dir) < std::cos(20.0 * M_PI / 180.0)) {
+      ++report.sides_not_meeting;
+      continue;
+    }
     // The point of the line nearest the old centre: both plane equations plus t = 0.
     Eigen::Matrix3d a;
     a.row(0) = plane_normal[0].transpose();
@@ -346,7 +454,10 @@ StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& 
     a.row(2) = line_dir.transpose();
     const Eigen::Vector3d rhs(plane_normal[0].dot(plane_centre[0]), plane_normal[1].dot(plane_centre[1]), 0.0);
     const Eigen::Vector3d line_point = a.colPivHouseholderQr().solve(rhs);
-    if (line_point.norm() > h) continue;
+    if (line_point.norm() > h) {
+      ++report.sides_not_meeting;
+      continue;
+    }
     centre += line_point;
     dir = line_dir;
     ++report.components;
@@ -366,11 +477,17 @@ StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& 
       if (std::abs(t - t_mid) > 0.5 * h || off(vh.idx()) > max_offset * h) continue;
       if (middle < 0 || off(vh.idx()) < off(middle)) middle = vh.idx();
     }
-    if (middle < 0) continue;
+    if (middle < 0) {
+      ++report.no_chain;
+      continue;
+    }
     std::vector<int> chain;
     for (int sense : {-1, 1}) {
       std::vector<int> half{middle};
-      const double limit = sense > 0 ? t_end + 1.5 * h : t_start - 1.5 * h;
+      // A run cut from a web ends where other creases begin: its chain stops half an
+      // edge short of the junction, whose vertices the runs would pull apart.
+      const double beyond = candidate.whole_set ? 1.5 * h : -0.5 * h;
+      const double limit = sense > 0 ? t_end + beyond : t_start - beyond;
       while (true) {
         const double t = along(half.back());
         int best = -1;
@@ -393,7 +510,10 @@ StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& 
         chain.insert(chain.end(), half.begin() + 1, half.end());
       }
     }
-    if (chain.size() < 3) continue;
+    if (chain.size() < 3) {
+      ++report.no_chain;
+      continue;
+    }
     // Move, and undo the component's moves when a face turns over.
     std::vector<std::pair<int, TinMesh::Point>> old;
     std::vector<int> faces;

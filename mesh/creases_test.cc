@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <functional>
 #include <cmath>
 #include <iostream>
 #include <set>
@@ -22,6 +23,16 @@ TinMesh GableMesh() {
   grid.max = Eigen::Vector2d(4, 4);
   grid.spacing = 1.0;  // the ridge y = 0 runs along grid vertices
   grid.height = GableHeight;
+  return MakeStartGrid(grid);
+}
+
+// A 1 m grid over [-half, half]^2 sampling the height function.
+TinMesh GridMesh(double half, std::function<double(double, double)> height) {
+  StartGridOptions grid;
+  grid.min = Eigen::Vector2d(-half, -half);
+  grid.max = Eigen::Vector2d(half, half);
+  grid.spacing = 1.0;
+  grid.height = std::move(height);
   return MakeStartGrid(grid);
 }
 
@@ -154,12 +165,7 @@ double RoundedRidgeHeight(double, double y) {
 }
 
 TEST(Creases, RidgeRoundedOverABandOfRowsIsFoundInItsMiddleRow) {
-  StartGridOptions grid;
-  grid.min = Eigen::Vector2d(-4, -4);
-  grid.max = Eigen::Vector2d(4, 4);
-  grid.spacing = 1.0;
-  grid.height = RoundedRidgeHeight;
-  const TinMesh mesh = MakeStartGrid(grid);
+  const TinMesh mesh = GridMesh(4, RoundedRidgeHeight);
   const std::vector<bool> crease = DetectCreaseEdges(mesh, 20.0, /*rounded_ridges=*/true);
   int found = 0, on_ridge = 0;
   for (auto eh : mesh.edges()) {
@@ -219,12 +225,7 @@ double MaxSkewGableError(const TinMesh& mesh, double crease_angle_deg, double in
 }
 
 TEST(Creases, RidgeSkewToTheGridEndsAsAStraightChainOfCreaseEdges) {
-  StartGridOptions grid;
-  grid.min = Eigen::Vector2d(-6, -6);
-  grid.max = Eigen::Vector2d(6, 6);
-  grid.spacing = 1.0;
-  grid.height = SkewGableHeight;
-  TinMesh mesh = MakeStartGrid(grid);
+  TinMesh mesh = GridMesh(6, SkewGableHeight);
   const double before = MaxSkewGableError(mesh, 20.0, 1.0);
   const StraightenReport report = StraightenCreaseChains(&mesh, DetectCreaseEdges(mesh, 20.0));
   const double after = MaxSkewGableError(mesh, 20.0, 1.0);
@@ -261,6 +262,49 @@ TEST(Creases, RidgeSkewToTheGridEndsAsAStraightChainOfCreaseEdges) {
   EXPECT_EQ(off_ridge_creases, 0);
   EXPECT_GT(before, 0.1);
   EXPECT_LT(after, 1e-3);
+}
+
+// A hip roof over a square, turned 11.3 degrees to a 1 m grid: its four hip lines meet
+// at the top and make one connected set of crease edges, an X that no single line fits.
+// StraightenCreaseChains cuts the set into straight runs (one per hip line) and puts
+// each on the line where its two roof faces meet.
+double PyramidHeight(double x, double y) {
+  const double u = std::cos(kSkew) * x + std::sin(kSkew) * y, v = -std::sin(kSkew) * x + std::cos(kSkew) * y;
+  return 4.0 - 0.6 * std::max(std::abs(u), std::abs(v));
+}
+
+TEST(Creases, HipLinesMeetingAtTheTopAreStraightenedOneByOne) {
+  TinMesh mesh = GridMesh(6, PyramidHeight);
+  auto max_error = [](const TinMesh& m) {
+    const Tessellation tess = Tessellate(m, BuildPatches(m, ComputeCornerNormals(m, 20.0)));
+    double worst = 0.0, sum = 0.0;
+    for (const auto& p : tess.points) {
+      const double e = std::abs(p.z() - PyramidHeight(p.x(), p.y()));
+      worst = std::max(worst, e);
+      sum += e;
+    }
+    return std::make_pair(worst, sum / tess.points.size());
+  };
+  const auto before = max_error(mesh);
+  const StraightenReport report = StraightenCreaseChains(&mesh, DetectCreaseEdges(mesh, 20.0));
+  const auto after = max_error(mesh);
+  std::cout << "hip roof: " << report.sets << " crease sets, " << report.lines << " straight runs, "
+            << report.components << " straightened (" << report.moved << " vertices, max " << report.max_move
+            << " m, " << report.rejected << " left for folds; too small " << report.too_small << ", too short "
+            << report.too_short << ", sides not planar " << report.sides_not_planar << ", not meeting "
+            << report.sides_not_meeting << ", no chain " << report.no_chain << "); height error max / mean "
+            << before.first << " / " << before.second << " m before, " << after.first << " / " << after.second
+            << " m after\n";
+  // Measured: 1 set, 4 runs, 4 lines, 20 vertices moved (max 0.89 m; the chains stop
+  // half an edge short of the top, one hip line's chain undone for a fold); mean height
+  // error 0.0146 -> 0.0066 m, max 0.236 m before and after (the undone line). Before
+  // the set was cut into runs: no line (the X fits none), nothing moved.
+  EXPECT_EQ(report.sets, 1);
+  EXPECT_EQ(report.lines, 4);
+  EXPECT_EQ(report.components, 4);
+  EXPECT_GE(report.moved, 15);
+  EXPECT_LT(after.second, 0.5 * before.second);
+  EXPECT_LE(after.first, before.first + 1e-9);
 }
 
 TEST(Creases, StraighteningLeavesAGridAlignedRidgeAndACylinderAsTheyAre) {

@@ -205,6 +205,12 @@ TEST(Reconstruct, StopsAtACoarserFinestLevel) {
   ReconstructionOptions bad = options;
   bad.finest_level = 3;
   EXPECT_THROW(bad.Check(), std::invalid_argument);
+  bad = options;
+  bad.straighten_tolerance = -0.01;
+  EXPECT_THROW(bad.Check(), std::invalid_argument);
+  bad.straighten_tolerance = 0.01;
+  bad.straighten_local_rings = -2;
+  EXPECT_THROW(bad.Check(), std::invalid_argument);
 }
 
 // Seed experiment 12: the gable ridge at 11.3 degrees to the grid, with the constant
@@ -246,8 +252,10 @@ TEST(Reconstruct, SkewRidgeIsStraightenedAndFitsWithinTheSeedRange) {
   std::cout << "skew ridge: " << kept << " straightening rounds kept, " << moved << " vertices moved; finest sigma0 "
             << sigma_with << " (without " << sigma_without << "), roof p90 " << p90_with << " m (without "
             << p90_without << " m)\n";
-  // Measured: 5 rounds kept (3 on level 1, 2 on level 0), 57 vertex moves; sigma0 4.285
-  // (without 4.532), roof p90 0.045 m (without 0.067 m).
+  // Measured (session 19, the windows around the moved vertices re-adjusted): 6 rounds
+  // kept (3 on level 1, 3 on level 0), 78 vertex moves; sigma0 4.297 (without 4.518),
+  // roof p90 0.055 m (without 0.077 m). With the whole level re-adjusted (before): 4.285,
+  // 0.045 m.
   EXPECT_GE(kept, 1);
   EXPECT_LE(sigma_with, 4.4);  // the seed's 4.2 within the acceptance range 3.8-4.4
   EXPECT_LT(sigma_with, sigma_without - 0.1);
