@@ -58,7 +58,9 @@ void CopyStepFields(const GuardedStep& step, Report* report) {
 // Repair of crossings the per-window fold guard cannot see (between windows, after
 // splits): the vertices of crossing triangles, and from round 2 on their rings grown by
 // one per round, move halfway to the mean of their neighbours (three Jacobi sweeps per
-// round), until no pair crosses or `max_rounds` is spent. Boundary vertices stay.
+// round), until no pair crosses or `max_rounds` is spent; then, if pairs are left, up
+// to `max_rounds` more rounds over the crossings grown by k rings with 3 (k + 1)^2
+// sweeps (a pleat folded flat needs the smoothing near convergence). Boundary vertices stay.
 // Vertex normals are not updated (the caller does). Returns the crossing pairs left.
 struct UntangleReport {
   int pairs_before = 0;
