@@ -772,7 +772,8 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       const bool better = now_sigma0 < was_sigma0 * (1.0 + options.straighten_tolerance);
       say("  level " + std::to_string(level) + " straightening " + std::to_string(round + 1) + ": " +
           std::to_string(straight.components) + " straight crease lines, " + std::to_string(straight.moved) +
-          " vertices put on them (max " + std::to_string(straight.max_move) + " m); sigma0 " +
+          " vertices put on them (max " + std::to_string(straight.max_move) + " m, " +
+          std::to_string(straight.flipped) + " faces of no area flipped); sigma0 " +
           std::to_string(now_sigma0) + " against " + std::to_string(was_sigma0) +
           (local_windows > 0 ? " (" + std::to_string(local_windows) + " local windows)" : "") +
           (better ? ", kept" : ", dropped"));

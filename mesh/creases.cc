@@ -22,6 +22,10 @@ Eigen::Vector3d AreaFaceNormal(const TinMesh& mesh, TinMesh::FaceHandle fh) {
   return (p1 - p0).cross(p2 - p0);
 }
 
+// A face is a cap (no area: its corners on one line) when its height over its longest
+// edge is below this fraction of that edge.
+constexpr double kCapHeight = 1e-3;
+
 Eigen::Vector3d UnitFaceNormal(const TinMesh& mesh, TinMesh::FaceHandle fh) {
   const Eigen::Vector3d n = AreaFaceNormal(mesh, fh);
   const double len = n.norm();
@@ -561,16 +565,67 @@ StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& 
       max_move = std::max(max_move, (target - point(v)).norm());
       mesh->set_point(vh, TinMesh::Point(target.x(), target.y(), target.z()));
     }
+    // Where the chain zigzags through a face, all three of its corners are now on the
+    // line: a cap with no area, whose normal is rounding noise (it passes the fold test
+    // by chance) and whose G1 patch divides by its area (block, session 21: 36 crossing
+    // facet pairs). Its long edge is flipped to the vertex across it, off the line: two
+    // faces with area for one without, the chain's edges kept. A cap that cannot be
+    // flipped (on the border, the vertex across on the line too, or a flipped face
+    // turned) leaves the run as it was, as a fold does.
     bool folded = false;
-    for (size_t i = 0; i < faces.size(); ++i) {
-      const Eigen::Vector3d n = UnitFaceNormal(*mesh, mesh->face_handle(faces[i]));
-      if (n.dot(normal_before[i]) < 0.5) folded = true;
+    std::vector<TinMesh::EdgeHandle> cap_edges;
+    auto normal_before_of = [&](TinMesh::FaceHandle fh) {
+      const auto it = std::lower_bound(faces.begin(), faces.end(), fh.idx());
+      return it != faces.end() && *it == fh.idx() ? normal_before[it - faces.begin()] : Eigen::Vector3d::Zero().eval();
+    };
+    for (size_t i = 0; i < faces.size() && !folded; ++i) {
+      const auto fh = mesh->face_handle(faces[i]);
+      TinMesh::HalfedgeHandle longest;
+      for (auto heh : mesh->fh_range(fh)) {
+        if (!longest.is_valid() || mesh->calc_edge_length(heh) > mesh->calc_edge_length(longest)) longest = heh;
+      }
+      const double long_edge = mesh->calc_edge_length(longest);
+      if (AreaFaceNormal(*mesh, fh).norm() > kCapHeight * long_edge * long_edge) {
+        if (UnitFaceNormal(*mesh, fh).dot(normal_before[i]) < 0.5) folded = true;
+        continue;
+      }
+      const auto edge = mesh->edge_handle(longest);
+      if (mesh->is_boundary(edge) || !mesh->is_flip_ok(edge)) {
+        folded = true;
+        continue;
+      }
+      // Face (a, b, apex) and across the long edge (b, a, other); flipped: (a, other,
+      // apex) and (b, apex, other), each judged against both faces before the move.
+      const auto across = mesh->opposite_halfedge_handle(longest);
+      const Eigen::Vector3d a = ToEigen(mesh->point(mesh->from_vertex_handle(longest)));
+      const Eigen::Vector3d b = ToEigen(mesh->point(mesh->to_vertex_handle(longest)));
+      const Eigen::Vector3d apex = ToEigen(mesh->point(mesh->to_vertex_handle(mesh->next_halfedge_handle(longest))));
+      const Eigen::Vector3d other = ToEigen(mesh->point(mesh->to_vertex_handle(mesh->next_halfedge_handle(across))));
+      for (const Eigen::Vector3d& n : {Eigen::Vector3d((other - a).cross(apex - a)),
+                                       Eigen::Vector3d((apex - b).cross(other - b))}) {
+        if (n.norm() <= kCapHeight * long_edge * long_edge) {
+          folded = true;
+          break;
+        }
+        for (auto face : {fh, mesh->face_handle(across)}) {
+          if (n.normalized().dot(normal_before_of(face)) < 0.5) folded = true;
+        }
+      }
+      cap_edges.push_back(edge);
     }
     if (folded) {
       for (const auto& [v, p] : old) mesh->set_point(mesh->vertex_handle(v), p);
       ++report.rejected;
       continue;
     }
+    for (auto edge : cap_edges) {
+      mesh->flip(edge);
+      for (int side : {0, 1}) {
+        const auto fh = mesh->face_handle(mesh->halfedge_handle(edge, side));
+        mesh->set_normal(fh, mesh->calc_face_normal(fh));
+      }
+    }
+    report.flipped += static_cast<int>(cap_edges.size());
     report.moved += static_cast<int>(old.size());
     report.max_move = std::max(report.max_move, max_move);
   }

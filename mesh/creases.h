@@ -65,12 +65,16 @@ std::vector<bool> DetectCreaseEdges(const TinMesh& mesh, double crease_angle_deg
 // along the line by at least a third of an edge and lies closest to it, within
 // max_offset edges; its vertices go onto the line, a border vertex by sliding along a
 // straight stretch of the border to where the line crosses it. A run is left as it was
-// when a face next to a moved vertex would turn by more than 60 degrees. Vertex normals
-// are updated when anything moved.
+// when a face next to a moved vertex would turn by more than 60 degrees. A face whose
+// three corners all went onto the line (the chain zigzags through it) has its long
+// edge flipped to the vertex across it (the vertex and face counts stay; the flipped
+// faces' indices are those of the two faces before); the run is left when it cannot be.
+// Vertex normals are updated when anything moved.
 struct StraightenReport {
   int components = 0;  // straight crease lines found
   int moved = 0;       // vertices put on their line
-  int rejected = 0;    // components left because a face would fold
+  int rejected = 0;    // components left because a face would fold (or a cap could not be flipped)
+  int flipped = 0;     // faces with no area (all three corners on the line) whose long edge was flipped
   double max_move = 0.0;
   // Why the other sets and runs were left (each counts once, at its first failing test):
   int sets = 0;               // connected sets of crease vertices
