@@ -333,7 +333,7 @@ TEST(Creases, HipLinesMeetingAtTheTopAreStraightenedOneByOne) {
 // through a face, that face's corners all go onto the line. Every such cap is flipped,
 // and no face of the result has no area or is turned over.
 TEST(Creases, StraighteningLeavesNoFaceWithoutAreaAtAnyAngle) {
-  int runs = 0, flipped = 0, caps_left = 0, turned = 0, cases_with_caps_before_flips = 0;
+  int runs = 0, flipped = 0, caps_left = 0, turned = 0, roofs_with_caps = 0;
   for (double deg : {3.0, 7.0, 11.3, 17.0, 23.0, 31.0, 38.0}) {
     const double c = std::cos(deg * M_PI / 180.0), s = std::sin(deg * M_PI / 180.0);
     for (double offset : {0.0, 0.17, 0.33, 0.5}) {
@@ -349,7 +349,7 @@ TEST(Creases, StraighteningLeavesNoFaceWithoutAreaAtAnyAngle) {
         const StraightenReport report = StraightenCreaseChains(&mesh, DetectCreaseEdges(mesh, 20.0));
         runs += report.components - report.rejected;
         flipped += report.flipped;
-        cases_with_caps_before_flips += report.flipped > 0;
+        roofs_with_caps += report.flipped > 0;
         caps_left += CountCaps(mesh);
         // Flips keep the face count and reuse the two faces' indices: compare each face's
         // normal with the same index before (a flipped face lies over the one it replaced).
@@ -366,7 +366,7 @@ TEST(Creases, StraighteningLeavesNoFaceWithoutAreaAtAnyAngle) {
     }
   }
   std::cout << "56 roofs at 7 angles and 4 offsets: " << runs << " lines straightened, " << flipped
-            << " faces of no area flipped (in " << cases_with_caps_before_flips << " roofs), " << caps_left
+            << " faces of no area flipped (in " << roofs_with_caps << " roofs), " << caps_left
             << " left, " << turned << " faces turned over\n";
   EXPECT_GT(runs, 56);
   EXPECT_GT(flipped, 0);
