@@ -11,6 +11,8 @@
 #include <numeric>
 #include <random>
 
+#include "mesh/local_ops.h"
+
 namespace facets {
 namespace {
 
@@ -23,7 +25,7 @@ Eigen::Vector3d AreaFaceNormal(const TinMesh& mesh, TinMesh::FaceHandle fh) {
 }
 
 // A face is a cap (no area: its corners on one line) when its height over its longest
-// edge is below this fraction of that edge.
+// edge is below this fraction of that edge (NoArea, mesh/local_ops.h).
 constexpr double kCapHeight = 1e-3;
 
 Eigen::Vector3d UnitFaceNormal(const TinMesh& mesh, TinMesh::FaceHandle fh) {
@@ -580,15 +582,13 @@ StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& 
     };
     for (size_t i = 0; i < faces.size() && !folded; ++i) {
       const auto fh = mesh->face_handle(faces[i]);
-      TinMesh::HalfedgeHandle longest;
-      for (auto heh : mesh->fh_range(fh)) {
-        if (!longest.is_valid() || mesh->calc_edge_length(heh) > mesh->calc_edge_length(longest)) longest = heh;
-      }
-      const double long_edge = mesh->calc_edge_length(longest);
-      if (AreaFaceNormal(*mesh, fh).norm() > kCapHeight * long_edge * long_edge) {
+      std::array<TinMesh::HalfedgeHandle, 3> by_length;
+      if (!DegenerateFace(*mesh, fh, kCapHeight, &by_length)) {
         if (UnitFaceNormal(*mesh, fh).dot(normal_before[i]) < 0.5) folded = true;
         continue;
       }
+      const auto longest = by_length[2];
+      const double long_edge = mesh->calc_edge_length(longest);
       const auto edge = mesh->edge_handle(longest);
       if (mesh->is_boundary(edge) || !mesh->is_flip_ok(edge)) {
         folded = true;
@@ -603,7 +603,7 @@ StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& 
       const Eigen::Vector3d other = ToEigen(mesh->point(mesh->to_vertex_handle(mesh->next_halfedge_handle(across))));
       for (const Eigen::Vector3d& n : {Eigen::Vector3d((other - a).cross(apex - a)),
                                        Eigen::Vector3d((apex - b).cross(other - b))}) {
-        if (n.norm() <= kCapHeight * long_edge * long_edge) {
+        if (NoArea(n.norm(), long_edge, kCapHeight)) {
           folded = true;
           break;
         }

@@ -8,6 +8,7 @@
 #include <iostream>
 #include <set>
 
+#include "mesh/local_ops.h"
 #include "mesh/tessellation.h"
 
 namespace facets {
@@ -226,18 +227,7 @@ double MaxSkewGableError(const TinMesh& mesh, double crease_angle_deg, double in
 
 // Faces whose height over their longest edge is below 1e-3 of that edge: caps with no
 // area, whose normals are rounding noise.
-int CountCaps(const TinMesh& mesh) {
-  int caps = 0;
-  for (auto fh : mesh.faces()) {
-    double longest = 0.0;
-    for (auto eh : mesh.fe_range(fh)) longest = std::max(longest, mesh.calc_edge_length(eh));
-    auto it = mesh.cfv_iter(fh);
-    const Eigen::Vector3d p0 = ToEigen(mesh.point(*it)), p1 = ToEigen(mesh.point(*++it)),
-                          p2 = ToEigen(mesh.point(*++it));
-    caps += (p1 - p0).cross(p2 - p0).norm() <= 1e-3 * longest * longest;
-  }
-  return caps;
-}
+int CountCaps(const TinMesh& mesh) { return CountDegenerate(mesh, 1e-3); }
 
 TEST(Creases, RidgeSkewToTheGridEndsAsAStraightChainOfCreaseEdges) {
   TinMesh mesh = GridMesh(6, SkewGableHeight);

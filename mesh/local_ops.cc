@@ -170,16 +170,10 @@ bool RemoveVertex(TinMesh* mesh, TinMesh::VertexHandle vh) {
   return true;
 }
 
-namespace {
-
-// A triangle of this doubled area and longest edge has no area to speak of: its least
-// height is below relative_height x the longest edge.
 bool NoArea(double twice_area, double longest, double relative_height) {
   return !(twice_area / longest >= relative_height * longest);
 }
 
-// The face's halfedges ordered by length: [0] shortest, [2] longest; whether the face has
-// no area (NoArea).
 bool DegenerateFace(const TinMesh& mesh, TinMesh::FaceHandle f, double relative_height,
                     std::array<TinMesh::HalfedgeHandle, 3>* by_length) {
   int k = 0;
@@ -198,6 +192,8 @@ int CountDegenerate(const TinMesh& mesh, double relative_height) {
   for (auto f : mesh.faces()) count += DegenerateFace(mesh, f, relative_height, &by_length);
   return count;
 }
+
+namespace {
 
 // Collapses `h` or its opposite (whichever OpenMesh allows; a boundary vertex is not
 // pulled off the boundary along an inner edge).

@@ -4,6 +4,8 @@
 // None of them re-triangulates globally.
 #pragma once
 
+#include <array>
+
 #include "mesh/tin.h"
 
 namespace facets {
@@ -89,6 +91,16 @@ int CountLongEdges(const TinMesh& mesh, const QualityOptions& options);
 // and boundary vertices stay: the hidden part becomes the membrane spanned by the seen
 // surface around it. Vertex normals are not updated. Returns the vertices relaxed.
 int RelaxUnseenVertices(TinMesh* mesh, const std::vector<int>& views, int iterations = 100);
+
+// A triangle of this doubled area and longest edge has no area to speak of: its least
+// height is below relative_height x the longest edge.
+bool NoArea(double twice_area, double longest, double relative_height);
+// The face's halfedges ordered by length: [0] shortest, [2] longest; whether the face has
+// no area (NoArea).
+bool DegenerateFace(const TinMesh& mesh, TinMesh::FaceHandle f, double relative_height,
+                    std::array<TinMesh::HalfedgeHandle, 3>* by_length);
+// Faces with no area (DegenerateFace).
+int CountDegenerate(const TinMesh& mesh, double relative_height);
 
 // Triangles of (nearly) no area in a mesh from elsewhere (a start mesh from another
 // program, points snapped onto one line): the G1 patch of such a triangle divides by
