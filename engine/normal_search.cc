@@ -23,22 +23,13 @@ struct Candidate {
   bool corner = false;  // won by a corner hypothesis
 };
 
-// Whether the image holds every sample the search can ask of it: the patch's corners at
-// both ends of the range and where the vertex is. An image that sees a vertex near its
-// frame would otherwise spoil every offset's score.
+// Whether the image holds every sample the search can ask of it: the patch at both ends
+// of the range and where the vertex is. An image that sees a vertex near its frame would
+// otherwise spoil every offset's score.
 bool HoldsSearchBox(const LevelImage& image, const Eigen::Vector3d& p, const Eigen::Vector3d& normal,
                     double range, double patch_radius) {
-  const auto [t1, t2] = TangentBasis(normal);
   for (double offset : {-range, 0.0, range}) {
-    for (double a : {-1.0, 1.0}) {
-      for (double b : {-1.0, 1.0}) {
-        const Eigen::Vector3d in_cam = image.cam_from_world * (p + offset * normal + patch_radius * (a * t1 + b * t2));
-        if (!(in_cam.z() > 0)) return false;
-        const Eigen::Vector2d pixel = image.camera->ImageFromCam(in_cam);
-        const int x = static_cast<int>(std::floor(pixel.x() - 0.5)), y = static_cast<int>(std::floor(pixel.y() - 0.5));
-        if (!image.pixels->Holds(x, y) || !image.pixels->Holds(x + 1, y + 1)) return false;
-      }
-    }
+    if (!ImageHoldsPatch(image, p + offset * normal, normal, patch_radius)) return false;
   }
   return true;
 }

@@ -20,6 +20,27 @@ bool SampleGrey(const ImagePlanes& image, const Eigen::Vector2d& position, doubl
   return true;
 }
 
+bool ImageHolds(const LevelImage& image, const Eigen::Vector3d& point) {
+  const Eigen::Vector3d in_cam = image.cam_from_world * point;
+  if (!(in_cam.z() > 0)) return false;
+  const Eigen::Vector2d pixel = image.camera->ImageFromCam(in_cam);
+  const double u = std::floor(pixel.x() - 0.5), v = std::floor(pixel.y() - 0.5);
+  if (!(std::abs(u) < 1e9 && std::abs(v) < 1e9)) return false;  // NaN or far off
+  const int x = static_cast<int>(u), y = static_cast<int>(v);
+  return image.pixels->Holds(x, y) && image.pixels->Holds(x + 1, y + 1);
+}
+
+bool ImageHoldsPatch(const LevelImage& image, const Eigen::Vector3d& centre, const Eigen::Vector3d& normal,
+                     double radius) {
+  const auto [t1, t2] = TangentBasis(normal);
+  for (double a : {-1.0, 1.0}) {
+    for (double b : {-1.0, 1.0}) {
+      if (!ImageHolds(image, centre + radius * (a * t1 + b * t2))) return false;
+    }
+  }
+  return true;
+}
+
 std::pair<Eigen::Vector3d, Eigen::Vector3d> TangentBasis(const Eigen::Vector3d& normal) {
   const Eigen::Vector3d t1 = normal.unitOrthogonal();
   return {t1, normal.cross(t1)};

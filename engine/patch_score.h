@@ -18,6 +18,16 @@ namespace facets {
 // False when the 2 x 2 neighbourhood is not all held.
 bool SampleGrey(const ImagePlanes& image, const Eigen::Vector2d& position, double* grey);
 
+// Whether `image` can sample the grey value at `point`: in front of its camera and the
+// 2 x 2 neighbourhood of its projection held (what SampleGrey needs).
+bool ImageHolds(const LevelImage& image, const Eigen::Vector3d& point);
+
+// Whether `image` holds the whole square patch of half-width `radius` around `centre`
+// in the plane normal to `normal` (its four corners: the patch is convex and so is the
+// frame).
+bool ImageHoldsPatch(const LevelImage& image, const Eigen::Vector3d& centre, const Eigen::Vector3d& normal,
+                     double radius);
+
 // Two unit vectors spanning the tangent plane of a unit normal (a patch's axes).
 std::pair<Eigen::Vector3d, Eigen::Vector3d> TangentBasis(const Eigen::Vector3d& normal);
 
