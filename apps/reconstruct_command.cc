@@ -92,6 +92,7 @@ struct ReconstructArgs {
   int straighten_rounds = ReconstructionOptions().straighten_rounds;
   int straighten_local_rings = ReconstructionOptions().straighten_local_rings;
   double straighten_tolerance = ReconstructionOptions().straighten_tolerance;
+  bool straighten_by_kind = false;
   bool normal_search_on = false, normal_search_off = false;
   int normal_search_last_level = ReconstructionOptions().normal_search_last_level;
   bool normal_search_support = false;
@@ -245,6 +246,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.straighten_rounds = args.straighten_rounds;
   options.straighten_local_rings = args.straighten_local_rings;
   options.straighten_tolerance = args.straighten_tolerance;
+  options.straighten_by_kind = args.straighten_by_kind;
   if (args.normal_search_on) options.normal_search = true;
   if (args.normal_search_off) options.normal_search = false;
   options.normal_search_last_level = args.normal_search_last_level;
@@ -507,6 +509,9 @@ void AddReconstructCommand(CLI::App& app) {
                   "straightening: kept unless sigma0 rises by more than this share (0 = only when it drops)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
+  sub->add_flag("--straighten-by-kind", args->straighten_by_kind,
+                "straightening: roof lines (ridges, hips) and then steep lines (eaves, feet) in rounds of their own, "
+                "each kept or dropped by itself (default: one round of all lines)");
   sub->add_flag("--normal-search", args->normal_search_on,
                 "before each finer level: steep vertices (walls) search along their normals for the offset where the "
                 "images agree best, so walls a coarser level left several pixels off come back (default: on for "

@@ -744,47 +744,59 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     // A crease skew to the grid (a zigzag of edges): its vertex chains go onto the
     // crease's line and the level runs again, kept only when it fits better; up to
     // straighten_rounds times while it does (each round refits the line to the
-    // surface the last one left).
-    for (int round = 0; round < options.straighten_rounds && !closed; ++round) {
-      TinMesh before = mesh;
-      const StraightenReport straight = StraightenCreaseChains(
-          &mesh, DetectCreaseEdges(mesh, adjustment_options.crease_angle_deg, adjustment_options.rounded_ridges));
-      if (straight.moved == 0) {
-        // Why nothing moved, so that a run's log tells (issue 7: eaves next to crumpled walls).
-        if (straight.sets > 0) {
-          say("  level " + std::to_string(level) + " straightening: " + std::to_string(straight.sets) +
-              " crease sets, " + std::to_string(straight.lines) + " straight runs, none moved (" +
-              std::to_string(straight.sides_not_planar) + " with a side not planar, " +
-              std::to_string(straight.sides_not_meeting) + " with sides not meeting on the run, " +
-              std::to_string(straight.too_small + straight.too_short) + " too short, " +
-              std::to_string(straight.rejected) + " undone for folds)");
+    // surface the last one left). Roof lines and steep lines in rounds of their own
+    // (straighten_by_kind): a round of one kind does not fall with the other's.
+    const std::vector<std::pair<CreaseLines, std::string>> kinds =
+        options.straighten_by_kind
+            ? std::vector<std::pair<CreaseLines, std::string>>{{CreaseLines::kRoof, "roof lines"},
+                                                                {CreaseLines::kSteep, "steep lines"}}
+            : std::vector<std::pair<CreaseLines, std::string>>{{CreaseLines::kAll, ""}};
+    for (const auto& [kind, kind_name] : kinds) {
+      const std::string what = kind_name.empty() ? "straightening" : "straightening " + kind_name;
+      for (int round = 0; round < options.straighten_rounds && !closed; ++round) {
+        TinMesh before = mesh;
+        const StraightenReport straight = StraightenCreaseChains(
+            &mesh, DetectCreaseEdges(mesh, adjustment_options.crease_angle_deg, adjustment_options.rounded_ridges),
+            kind);
+        if (straight.moved == 0) {
+          // Why nothing moved, so that a run's log tells (issue 7: eaves next to crumpled walls).
+          if (straight.sets > 0) {
+            say("  level " + std::to_string(level) + " " + what + ": " +
+                std::to_string(straight.sets) + " crease sets, " + std::to_string(straight.lines) +
+                " straight runs, none moved (" + std::to_string(straight.sides_not_planar) +
+                " with a side not planar, " + std::to_string(straight.sides_not_meeting) +
+                " with sides not meeting on the run, " + std::to_string(straight.too_small + straight.too_short) +
+                " too short, " + std::to_string(straight.rejected) + " undone for folds" +
+                (kind == CreaseLines::kAll ? "" : ", " + std::to_string(straight.other_kind) + " of the other kind") +
+                ")");
+          }
+          break;
         }
-        break;
+        Readjusted re = readjust(before, options.straighten_local_rings);
+        if (!re.done) {
+          mesh = std::move(before);
+          break;
+        }
+        LevelAdjustment& again = re.level;
+        const double was_sigma0 = re.was_sigma0, now_sigma0 = re.now_sigma0;
+        const int local_windows = re.local_windows;
+        const bool better = now_sigma0 < was_sigma0 * (1.0 + options.straighten_tolerance);
+        say("  level " + std::to_string(level) + " " + what + " " + std::to_string(round + 1) + ": " +
+            std::to_string(straight.components) + " straight crease lines, " + std::to_string(straight.moved) +
+            " vertices put on them (max " + std::to_string(straight.max_move) + " m, " +
+            std::to_string(straight.flipped) + " faces of no area flipped); sigma0 " +
+            std::to_string(now_sigma0) + " against " + std::to_string(was_sigma0) +
+            (local_windows > 0 ? " (" + std::to_string(local_windows) + " local windows)" : "") +
+            (better ? ", kept" : ", dropped"));
+        if (!better) {
+          mesh = std::move(before);
+          ++level_report.straighten_dropped;
+          break;
+        }
+        adjusted = std::move(again);
+        ++level_report.straighten_kept;
+        level_report.straightened += straight.moved;
       }
-      Readjusted re = readjust(before, options.straighten_local_rings);
-      if (!re.done) {
-        mesh = std::move(before);
-        break;
-      }
-      LevelAdjustment& again = re.level;
-      const double was_sigma0 = re.was_sigma0, now_sigma0 = re.now_sigma0;
-      const int local_windows = re.local_windows;
-      const bool better = now_sigma0 < was_sigma0 * (1.0 + options.straighten_tolerance);
-      say("  level " + std::to_string(level) + " straightening " + std::to_string(round + 1) + ": " +
-          std::to_string(straight.components) + " straight crease lines, " + std::to_string(straight.moved) +
-          " vertices put on them (max " + std::to_string(straight.max_move) + " m, " +
-          std::to_string(straight.flipped) + " faces of no area flipped); sigma0 " +
-          std::to_string(now_sigma0) + " against " + std::to_string(was_sigma0) +
-          (local_windows > 0 ? " (" + std::to_string(local_windows) + " local windows)" : "") +
-          (better ? ", kept" : ", dropped"));
-      if (!better) {
-        mesh = std::move(before);
-        ++level_report.straighten_dropped;
-        break;
-      }
-      adjusted = std::move(again);
-      ++level_report.straighten_kept;
-      level_report.straightened += straight.moved;
     }
     // After the finest level's last adjustment too (a pocket folded under an eave, seen
     // by no image, would stay in the products): same topology, so only the products'

@@ -121,6 +121,13 @@ struct ReconstructionOptions {
   // unless its sigma0 rises (below); at most this many rounds (0 = off). Off for closed
   // starts.
   int straighten_rounds = 3;
+  // Roof lines (ridges, hips) and steep lines (eaves, feet) in rounds of their own, each
+  // up to straighten_rounds and kept or dropped by itself (CreaseLines, mesh/creases.h).
+  // Off by default: on the block (session 24) the roof median over five regions went
+  // 0.0676 -> 0.0654 GSD and the ridges 0.319 -> 0.288 GSD (A 0.270 -> 0.125, B 0.284 ->
+  // 0.341), and with --thorough-walls A the ridges went 0.062 -> 0.142 GSD: the gate, a
+  // window's sigma0, is moved more by its crumpled walls than by a ridge.
+  bool straighten_by_kind = false;
   // The straightening's run of the level again: only the windows over the faces within
   // this many edge rings of the vertices it moved, judged by those windows' sigma0
   // (engine/local_readjustment.h; -1 = the whole level, judged by the level's). Local

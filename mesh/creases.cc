@@ -288,8 +288,8 @@ std::vector<std::vector<int>> StraightRuns(const TinMesh& mesh, std::vector<int>
 
 }  // namespace
 
-StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& crease_edge, int min_edges,
-                                        double max_offset) {
+StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& crease_edge, CreaseLines lines,
+                                        int min_edges, double max_offset) {
   StraightenReport report;
   const double crease_min_deg = 10.0;  // the two side planes must meet at least at this angle
   // The side planes are fitted 1-3 edges from the component's line: nearer than one
@@ -441,6 +441,14 @@ StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& 
     if (!planes) {
       ++report.sides_not_planar;
       continue;
+    }
+    if (lines != CreaseLines::kAll) {
+      const double min_roof_nz = std::cos(kSteepCreaseSideDeg * M_PI / 180.0);
+      const bool steep = std::abs(plane_normal[0].z()) < min_roof_nz || std::abs(plane_normal[1].z()) < min_roof_nz;
+      if (steep != (lines == CreaseLines::kSteep)) {
+        ++report.other_kind;
+        continue;
+      }
     }
     Eigen::Vector3d line_dir = plane_normal[0].cross(plane_normal[1]);
     if (line_dir.norm() < std::sin(crease_min_deg * M_PI / 180.0)) {

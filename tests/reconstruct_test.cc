@@ -255,7 +255,8 @@ TEST(Reconstruct, SkewRidgeIsStraightenedAndFitsWithinTheSeedRange) {
   // Measured (session 19, the windows around the moved vertices re-adjusted): 6 rounds
   // kept (3 on level 1, 3 on level 0), 78 vertex moves; sigma0 4.297 (without 4.518),
   // roof p90 0.055 m (without 0.077 m). With the whole level re-adjusted (before): 4.285,
-  // 0.045 m.
+  // 0.045 m. Session 24 (the same path since sessions 22-23 changed the levels): 4 rounds
+  // kept, 54 moves, sigma0 4.304 (without 4.521), roof p90 0.059 m (without 0.076 m).
   EXPECT_GE(kept, 1);
   EXPECT_LE(sigma_with, 4.4);  // the seed's 4.2 within the acceptance range 3.8-4.4
   EXPECT_LT(sigma_with, sigma_without - 0.1);
