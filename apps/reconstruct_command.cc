@@ -126,6 +126,7 @@ struct ReconstructArgs {
   std::string displacement = "normal";
   bool no_fold_guard = false;
   bool no_relax_unseen = false;
+  bool no_fold_lips = false;
   bool no_untangle = false;
   bool keep_crossing_facets = false;
   bool sector_regularisation = false;
@@ -279,6 +280,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.adjustment.displacement = DisplacementFromName(args.displacement);
   options.adjustment.fold_guard = !args.no_fold_guard;
   options.relax_unseen = !args.no_relax_unseen;
+  options.fold_lips = !args.no_fold_lips;
   options.untangle = !args.no_untangle;
   options.flatten_crossing_facets = !args.keep_crossing_facets;
   options.adjustment.sector_regularisation = args.sector_regularisation;
@@ -637,6 +639,9 @@ void AddReconstructCommand(CLI::App& app) {
                 "crease vertices: curvature pseudo-observations per sector between the creases");
   sub->add_flag("--no-relax-unseen", args->no_relax_unseen,
                 "leave vertices no image saw where the adjustment left them");
+  sub->add_flag("--no-fold-lips", args->no_fold_lips,
+                "leave lips in front of walls whose underside no image sees where the adjustment left them "
+                "(by default they are laid onto the seen wall's plane and kept when the images agree)");
   sub->add_flag("--no-untangle", args->no_untangle,
                 "leave triangle pairs that cross after a level as they are (they are counted in report.json)");
   sub->add_flag("--keep-crossing-facets", args->keep_crossing_facets,

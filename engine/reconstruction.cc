@@ -19,6 +19,7 @@
 #include "mesh/local_ops.h"
 #include "mesh/subdivision.h"
 #include "mesh/surface_validity.h"
+#include "mesh/unseen_lips.h"
 
 namespace facets {
 namespace {
@@ -272,6 +273,9 @@ std::string ReconstructionReport::Json() const {
     l["self_intersections"] = level.self_intersections;
     l["fold_limited"] = level.fold_limited;
     l["relaxed_unseen"] = level.relaxed;
+    l["lips_folded"] = level.lips_folded;
+    l["lip_vertices_moved"] = level.lip_vertices_moved;
+    l["lips_dropped"] = level.lips_dropped;
     l["crossing_pairs_untangled"] = level.crossing_untangled;
     l["untangle_moved_vertices"] = level.untangle_moved;
     l["straighten_passes_kept"] = level.straighten_kept;
@@ -805,6 +809,69 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     // synthetic object), and relaxing them cost its completeness (0.95 -> 0.947).
     const bool relax_now = level > finest || !closed;
     if (relax_now && relax_unseen() > 0 && level == finest) update_products_surface();
+    // Lips and pockets beside walls that no image sees (mesh/unseen_lips.h): each laid
+    // onto the seen wall's plane, the windows around it adjusted again, kept when the
+    // images there agree; one at a time, so that one bad lip does not take the others
+    // with it. Closed objects have no walls; a fitted-plane start is a facade itself,
+    // its unseen parts are the ground and sky beside it.
+    if (options.fold_lips && !closed && !fitted) {
+      LipFoldOptions lip_options;
+      lip_options.front_tolerance = 0.15 * edge_length(level);
+      lip_options.max_plane_rms = 0.25 * edge_length(level);
+      const LipSearch search =
+          FindUnseenLips(mesh, VisibleViews(mesh, block, 0.25 * edge_length(level)), lip_options);
+      if (search.groups > 0) {
+        say("  level " + std::to_string(level) + ": " + std::to_string(search.groups) +
+            " groups of unseen steep or down-facing vertices, " + std::to_string(search.lips.size()) +
+            " lips or pockets off a seen wall (" + std::to_string(search.no_wall) + " without a wall, " +
+            std::to_string(search.not_free) + " not free)");
+      }
+      int crossing = search.lips.empty() ? 0 : CountSelfIntersections(mesh);
+      int folded = search.lips.empty() ? 0 : CountFoldedFaces(mesh);
+      for (const UnseenLip& lip : search.lips) {
+        TinMesh before = mesh;
+        const LipFold fold = LayLipOntoWall(&mesh, lip, lip_options.embedding_iterations);
+        UpdateVertexNormals(&mesh);
+        // A lip laid onto a crumpled wall's plane can cut through the wall itself (block A,
+        // default, session 27: 89 crossing pairs the untangling could not undo).
+        const int crossing_now = CountSelfIntersections(mesh), folded_now = CountFoldedFaces(mesh);
+        if (crossing_now > crossing || folded_now > folded) {
+          std::ostringstream line;
+          line.precision(3);
+          line << std::fixed << "  level " << level << ": " << (fold.in_front > 0 ? "lip" : "pocket") << " at ("
+               << fold.centre.x() << ", " << fold.centre.y() << ", " << fold.centre.z() << "), " << fold.vertices
+               << " vertices: laid onto the wall it makes " << crossing_now - crossing << " crossing pairs and "
+               << folded_now - folded << " folded faces, left";
+          say(line.str());
+          mesh = std::move(before);
+          ++level_report.lips_dropped;
+          continue;
+        }
+        Readjusted re = readjust(before, options.fold_lips_local_rings);
+        const bool better = re.done && re.now_sigma0 < re.was_sigma0 * (1.0 + options.fold_lips_tolerance);
+        std::ostringstream line;
+        line.precision(3);
+        line << std::fixed << "  level " << level << ": " << (fold.in_front > 0 ? "lip" : "pocket") << " at ("
+             << fold.centre.x() << ", " << fold.centre.y() << ", " << fold.centre.z() << "), " << fold.vertices
+             << " vertices (" << fold.in_front << " in front), laid onto the wall (normal " << fold.normal.x()
+             << ", " << fold.normal.y() << ", " << fold.normal.z() << "; " << fold.support << " seen vertices, rms "
+             << fold.plane_rms << " m), max move " << fold.max_move << " m; sigma0 " << re.now_sigma0
+             << " against " << re.was_sigma0 << " (" << re.local_windows << " local windows), "
+             << (better ? "kept" : "dropped");
+        say(line.str());
+        if (better) {
+          adjusted = std::move(re.level);
+          ++level_report.lips_folded;
+          level_report.lip_vertices_moved += fold.vertices;
+          crossing = CountSelfIntersections(mesh);
+          folded = CountFoldedFaces(mesh);
+        } else {
+          mesh = std::move(before);
+          ++level_report.lips_dropped;
+        }
+      }
+      if (level_report.lips_folded > 0 && level == finest) update_products_surface();
+    }
     // Silhouette constraint of a visual-hull start: the surface may not leave the hull.
     if (closed && closed->visual_hull && (options.closed.hull_clamp || options.closed.hull_rims)) {
       const std::vector<bool> creases = DetectCreaseEdges(mesh, adjustment_options.crease_angle_deg,

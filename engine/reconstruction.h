@@ -106,6 +106,17 @@ struct ReconstructionOptions {
   // After each adjustment of a level, vertices no image saw move to the membrane
   // spanned by the seen surface around them (RelaxUnseenVertices, mesh/local_ops.h).
   bool relax_unseen = true;
+  // After each level's adjustment (not for closed or fitted-plane starts): lips of the
+  // surface in front of a wall whose underside no image sees, and pockets behind it that
+  // their rims hide, are laid onto the plane of the seen wall beside them, one at a time
+  // (FindUnseenLips, LayLipOntoWall: mesh/unseen_lips.h); each is left when it makes
+  // triangles cross or fold, else the windows within fold_lips_local_rings edge rings of
+  // its vertices run again and it is kept unless their sigma0 rises by more than
+  // fold_lips_tolerance (issue 7: one such lip carried 68 % of the squared wall error of
+  // the block's thorough run).
+  bool fold_lips = true;
+  int fold_lips_local_rings = 2;
+  double fold_lips_tolerance = 0.01;
   // After each level: triangle pairs that cross (between windows, after splits: the
   // fold guard only sees one window's step) are untangled by local smoothing of their
   // corners and rings (UntangleSelfIntersections, mesh/surface_validity.h).
@@ -277,6 +288,11 @@ struct LevelReport {
   int hull_clamped = 0;     // vertices pulled inside the visual hull (ClosedStartOptions::hull_clamp)
   int hull_unresolved = 0;  // outside it and not pulled in
   int hull_rim_pushed = 0;  // inside it, pushed out onto its rims (ClosedStartOptions::hull_rims)
+  // ReconstructionOptions::fold_lips: lips and pockets laid onto their walls and kept,
+  // their vertices, and those dropped (crossing or folded triangles, or a worse fit).
+  int lips_folded = 0;
+  int lip_vertices_moved = 0;
+  int lips_dropped = 0;
   int crossing_untangled = 0;  // crossing pairs before the untangling (ReconstructionOptions::untangle)
   int untangle_moved = 0;      // vertices it moved
   // ReconstructionOptions::straighten_rounds: level runs after straightening kept and

@@ -1,0 +1,172 @@
+#include "mesh/unseen_lips.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "mesh/surface_validity.h"
+
+namespace facets {
+namespace {
+
+// A building's edge in profile, extruded along y over [0, 10] at spacing h: ground in
+// front (x 6 -> 0, z 0), the wall (x 0, z 0 -> 10, facing +x), the roof (x 0 -> -6,
+// z 10). With a lip, the wall between z 4 and 9 and y 3 and 7 bulges out: up to
+// `lip` m in front at z 8, rising slowly from z 4 (its underside faces down) and
+// falling back to the wall at z 9, as the thorough block run's lip does.
+TinMesh WallWithLip(double lip, double h = 0.5) {
+  TinMesh mesh;
+  const int ns = static_cast<int>(std::lround(22.0 / h)), ny = static_cast<int>(std::lround(10.0 / h));
+  std::vector<TinMesh::VertexHandle> vh;
+  for (int i = 0; i <= ns; ++i) {
+    const double s = i * h;
+    for (int j = 0; j <= ny; ++j) {
+      const double y = j * h;
+      Eigen::Vector3d p;
+      if (s <= 6.0) {
+        p = {6.0 - s, y, 0.0};
+      } else if (s <= 16.0) {
+        const double z = s - 6.0;
+        const double rise = z < 4.0 ? 0.0 : z <= 8.0 ? (z - 4.0) / 4.0 : z <= 9.0 ? 9.0 - z : 0.0;
+        const double across = y > 3.0 && y < 7.0 ? std::pow(std::sin(M_PI * (y - 3.0) / 4.0), 2) : 0.0;
+        p = {lip * rise * across, y, z};
+      } else {
+        p = {16.0 - s, y, 10.0};
+      }
+      vh.push_back(mesh.add_vertex(ToOpenMesh(p)));
+    }
+  }
+  auto at = [&](int i, int j) { return vh[i * (ny + 1) + j]; };
+  for (int i = 0; i < ns; ++i) {
+    for (int j = 0; j < ny; ++j) {
+      // Counter-clockwise seen from outside (above the ground, in front of the wall).
+      mesh.add_face(at(i, j), at(i, j + 1), at(i + 1, j + 1));
+      mesh.add_face(at(i, j), at(i + 1, j + 1), at(i + 1, j));
+    }
+  }
+  UpdateVertexNormals(&mesh);
+  return mesh;
+}
+
+// The lip's underside (facing down) seen by no image, everything else by three.
+std::vector<int> ViewsOfLip(const TinMesh& mesh) {
+  std::vector<int> views(mesh.n_vertices(), 3);
+  for (auto v : mesh.vertices()) {
+    if (mesh.point(v)[0] > 1e-6 && mesh.point(v)[2] > 1e-6 && mesh.normal(v)[2] < 0.0) views[v.idx()] = 0;
+  }
+  return views;
+}
+
+TEST(UnseenLips, TheLipIsLaidFlatOntoTheSeenWallWithoutFolds) {
+  TinMesh mesh = WallWithLip(2.5);
+  // The test scene's orientation: the wall faces +x, the ground up.
+  ASSERT_GT(mesh.normal(mesh.vertex_handle(18 * 21 + 1))[0], 0.9);
+  ASSERT_GT(mesh.normal(mesh.vertex_handle(2 * 21 + 5))[2], 0.9);
+  int in_front = 0, down = 0;
+  const std::vector<int> views = ViewsOfLip(mesh);
+  for (auto v : mesh.vertices()) {
+    if (mesh.point(v)[0] > 0.05 && mesh.point(v)[2] > 1e-6) ++in_front;
+    if (views[v.idx()] == 0 && mesh.normal(v)[2] < -0.3) ++down;
+  }
+  ASSERT_GE(down, 3);
+  ASSERT_EQ(CountFoldedFaces(mesh), 0);
+  const TinMesh before = mesh;
+
+  LipFoldOptions options;
+  options.front_tolerance = 0.05;
+  const LipFoldReport report = FoldUnseenLipsOntoWalls(&mesh, views, options);
+  ASSERT_EQ(report.groups, 1);
+  ASSERT_EQ(report.folded, 1);
+  ASSERT_EQ(report.lips.size(), 1u);
+  const LipFold& lip = report.lips[0];
+  EXPECT_NEAR(lip.normal.x(), 1.0, 1e-9);
+  EXPECT_LT(lip.plane_rms, 1e-9);
+  EXPECT_GE(lip.support, 6);
+  // Every vertex in front of the wall by more than the tolerance went onto it.
+  EXPECT_EQ(lip.vertices, in_front);
+  EXPECT_EQ(report.moved, in_front);
+  EXPECT_NEAR(report.max_move, 2.5, 0.3);
+  int on_wall = 0;
+  for (auto v : mesh.vertices()) {
+    const double x = mesh.point(v)[0];
+    if (before.point(v)[0] > 0.05 && before.point(v)[2] > 1e-6) {
+      EXPECT_NEAR(x, 0.0, 1e-9) << "vertex " << v.idx();
+      ++on_wall;
+    } else {
+      EXPECT_EQ(mesh.point(v), before.point(v)) << "vertex " << v.idx() << " outside the lip moved";
+    }
+  }
+  EXPECT_EQ(on_wall, in_front);
+  // Laid flat without folds: every face on the wall faces +x, and nothing crosses.
+  UpdateVertexNormals(&mesh);
+  for (auto f : mesh.faces()) {
+    bool on_plane = true;
+    for (auto v : mesh.fv_range(f)) on_plane = on_plane && std::abs(mesh.point(v)[0]) < 1e-9 && mesh.point(v)[2] > 0.0;
+    if (on_plane && mesh.point(*mesh.fv_begin(f))[2] < 10.0) {
+      EXPECT_GT(mesh.normal(f)[0], 0.999) << "face " << f.idx();
+    }
+  }
+  EXPECT_EQ(CountFoldedFaces(mesh), 0);
+  EXPECT_EQ(CountSelfIntersections(mesh), 0);
+}
+
+// The same bulge pushed behind the wall (lip < 0): a pocket into the building, hidden by
+// its own rims from every image; the roof behind the wall plane is seen.
+TEST(UnseenLips, APocketBehindTheWallIsLaidOntoItAndTheSeenRoofStays) {
+  TinMesh mesh = WallWithLip(-2.5);
+  std::vector<int> views(mesh.n_vertices(), 3);
+  int behind = 0;
+  for (auto v : mesh.vertices()) {
+    const auto p = mesh.point(v);
+    if (p[0] < -1e-6 && p[2] > 0.0 && p[2] < 10.0 - 1e-9) views[v.idx()] = 0;
+    if (p[0] < -0.05 && p[2] > 0.0 && p[2] < 10.0 - 1e-9) ++behind;
+  }
+  ASSERT_GT(behind, 20);
+  const TinMesh before = mesh;
+  const LipSearch search = FindUnseenLips(mesh, views, {});
+  ASSERT_EQ(search.lips.size(), 1u);
+  EXPECT_EQ(search.lips[0].in_front, 0);
+  EXPECT_EQ(static_cast<int>(search.lips[0].vertices.size()), behind);
+  const LipFold fold = LayLipOntoWall(&mesh, search.lips[0]);
+  EXPECT_NEAR(fold.max_move, 2.5, 0.3);
+  for (auto v : mesh.vertices()) {
+    const auto p = before.point(v);
+    if (p[0] < -0.05 && p[2] > 0.0 && p[2] < 10.0 - 1e-9) {
+      EXPECT_NEAR(mesh.point(v)[0], 0.0, 1e-9) << "vertex " << v.idx();
+    } else {
+      EXPECT_EQ(mesh.point(v), p) << "vertex " << v.idx() << " outside the pocket moved";
+    }
+  }
+  EXPECT_EQ(CountFoldedFaces(mesh), 0);
+  EXPECT_EQ(CountSelfIntersections(mesh), 0);
+}
+
+TEST(UnseenLips, ASeenLipAndALipWithoutAWallAreLeftAlone) {
+  TinMesh mesh = WallWithLip(2.5);
+  const TinMesh before = mesh;
+  // Seen by three images everywhere: the images hold it, not this operation.
+  LipFoldReport report = FoldUnseenLipsOntoWalls(&mesh, std::vector<int>(mesh.n_vertices(), 3), {});
+  EXPECT_EQ(report.groups, 0);
+  EXPECT_EQ(report.folded, 0);
+  // The wall around it seen by one image only: no plane to lay it onto.
+  std::vector<int> views = ViewsOfLip(mesh);
+  for (auto v : mesh.vertices()) {
+    if (views[v.idx()] > 0 && std::abs(mesh.normal(v)[2]) < 0.5) views[v.idx()] = 1;
+  }
+  report = FoldUnseenLipsOntoWalls(&mesh, views, {});
+  EXPECT_EQ(report.groups, 1);
+  EXPECT_EQ(report.no_wall, 1);
+  EXPECT_EQ(report.folded, 0);
+  for (auto v : mesh.vertices()) EXPECT_EQ(mesh.point(v), before.point(v));
+  // A lip too large to be one (max_lip): left alone and counted.
+  LipFoldOptions small;
+  small.max_lip = 5;
+  report = FoldUnseenLipsOntoWalls(&mesh, ViewsOfLip(mesh), small);
+  EXPECT_EQ(report.not_free, 1);
+  EXPECT_EQ(report.folded, 0);
+  for (auto v : mesh.vertices()) EXPECT_EQ(mesh.point(v), before.point(v));
+  EXPECT_THROW(FoldUnseenLipsOntoWalls(&mesh, {1, 2}, {}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace facets
