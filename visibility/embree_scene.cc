@@ -1,6 +1,7 @@
 #include "visibility/embree_scene.h"
 
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -19,10 +20,16 @@ void ErrorCallback(void*, RTCError code, const char* message) {
 }  // namespace
 
 EmbreeDevice::EmbreeDevice() {
-  device_ = rtcNewDevice(nullptr);
+  // Embree picks its kernels by the CPU (SSE4.2, AVX2, AVX-512), and ray hits on edges,
+  // and every decision that follows from them, can differ between machines (block A by
+  // default, docs/EXPERIMENTS.md session 27). FACETS_EMBREE_CONFIG passes a device
+  // configuration, e.g. "isa=avx2", to compare runs across machines.
+  const char* config = std::getenv("FACETS_EMBREE_CONFIG");
+  device_ = rtcNewDevice(config && *config ? config : nullptr);
   if (!device_) {
     throw std::runtime_error("Embree: cannot create a device (error " +
                              std::to_string(static_cast<int>(rtcGetDeviceError(nullptr))) +
+                             (config && *config ? ", FACETS_EMBREE_CONFIG=\"" + std::string(config) + "\"" : "") +
                              ")");
   }
   rtcSetDeviceErrorFunction(device_, ErrorCallback, nullptr);
