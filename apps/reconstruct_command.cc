@@ -640,8 +640,9 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_flag("--no-relax-unseen", args->no_relax_unseen,
                 "leave vertices no image saw where the adjustment left them");
   sub->add_flag("--no-fold-lips", args->no_fold_lips,
-                "leave lips in front of walls whose underside no image sees where the adjustment left them "
-                "(by default they are laid onto the seen wall's plane and kept when the images agree)");
+                "leave lips in front of walls whose underside no image sees, and pockets behind them, where the "
+                "adjustment left them (by default they are laid onto the seen wall's plane and kept when the "
+                "images agree)");
   sub->add_flag("--no-untangle", args->no_untangle,
                 "leave triangle pairs that cross after a level as they are (they are counted in report.json)");
   sub->add_flag("--keep-crossing-facets", args->keep_crossing_facets,

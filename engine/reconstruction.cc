@@ -826,6 +826,15 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
             " lips or pockets off a seen wall (" + std::to_string(search.no_wall) + " without a wall, " +
             std::to_string(search.not_free) + " not free)");
       }
+      // "level L: lip at (x, y, z), N vertices" for the log.
+      auto describe = [&](const LipFold& fold) {
+        std::ostringstream line;
+        line.precision(3);
+        line << std::fixed << "  level " << level << ": " << (fold.in_front > 0 ? "lip" : "pocket") << " at ("
+             << fold.centre.x() << ", " << fold.centre.y() << ", " << fold.centre.z() << "), " << fold.vertices
+             << " vertices";
+        return line;
+      };
       int crossing = search.lips.empty() ? 0 : CountSelfIntersections(mesh);
       int folded = search.lips.empty() ? 0 : CountFoldedFaces(mesh);
       for (const UnseenLip& lip : search.lips) {
@@ -836,11 +845,8 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
         // default, session 27: 89 crossing pairs the untangling could not undo).
         const int crossing_now = CountSelfIntersections(mesh), folded_now = CountFoldedFaces(mesh);
         if (crossing_now > crossing || folded_now > folded) {
-          std::ostringstream line;
-          line.precision(3);
-          line << std::fixed << "  level " << level << ": " << (fold.in_front > 0 ? "lip" : "pocket") << " at ("
-               << fold.centre.x() << ", " << fold.centre.y() << ", " << fold.centre.z() << "), " << fold.vertices
-               << " vertices: laid onto the wall it makes " << crossing_now - crossing << " crossing pairs and "
+          std::ostringstream line = describe(fold);
+          line << ": laid onto the wall it makes " << crossing_now - crossing << " crossing pairs and "
                << folded_now - folded << " folded faces, left";
           say(line.str());
           mesh = std::move(before);
@@ -849,11 +855,8 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
         }
         Readjusted re = readjust(before, options.fold_lips_local_rings);
         const bool better = re.done && re.now_sigma0 < re.was_sigma0 * (1.0 + options.fold_lips_tolerance);
-        std::ostringstream line;
-        line.precision(3);
-        line << std::fixed << "  level " << level << ": " << (fold.in_front > 0 ? "lip" : "pocket") << " at ("
-             << fold.centre.x() << ", " << fold.centre.y() << ", " << fold.centre.z() << "), " << fold.vertices
-             << " vertices (" << fold.in_front << " in front), laid onto the wall (normal " << fold.normal.x()
+        std::ostringstream line = describe(fold);
+        line << " (" << fold.in_front << " in front), laid onto the wall (normal " << fold.normal.x()
              << ", " << fold.normal.y() << ", " << fold.normal.z() << "; " << fold.support << " seen vertices, rms "
              << fold.plane_rms << " m), max move " << fold.max_move << " m; sigma0 " << re.now_sigma0
              << " against " << re.was_sigma0 << " (" << re.local_windows << " local windows), "
