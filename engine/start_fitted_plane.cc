@@ -1,10 +1,11 @@
 #include "engine/start_fitted_plane.h"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+
+#include "mesh/principal_axes.h"
 
 namespace facets {
 namespace {
@@ -16,16 +17,11 @@ struct PlaneFit {
 };
 
 PlaneFit FitTls(const std::vector<Eigen::Vector3d>& points) {
-  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-  for (const auto& p : points) centre += p;
-  centre /= static_cast<double>(points.size());
-  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-  for (const auto& p : points) scatter += (p - centre) * (p - centre).transpose();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(scatter);
+  const PrincipalAxes principal = FitPrincipalAxes(points);
   PlaneFit fit;
-  fit.centre = centre;
-  fit.eigenvalues = solver.eigenvalues();
-  for (int i = 0; i < 3; ++i) fit.axes.col(i) = solver.eigenvectors().col(2 - i);
+  fit.centre = principal.centre;
+  fit.eigenvalues = principal.eigenvalues;
+  for (int i = 0; i < 3; ++i) fit.axes.col(i) = principal.axes.col(2 - i);
   return fit;
 }
 

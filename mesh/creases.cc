@@ -3,7 +3,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -12,6 +11,7 @@
 #include <random>
 
 #include "mesh/local_ops.h"
+#include "mesh/principal_axes.h"
 
 namespace facets {
 namespace {
@@ -355,13 +355,11 @@ StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& 
     Eigen::Vector3d centre, dir;
     for (int round = 0; round < 3; ++round) {
       if (kept.size() < 3) break;
-      centre.setZero();
-      for (int v : kept) centre += point(v);
-      centre /= static_cast<double>(kept.size());
-      Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-      for (int v : kept) scatter += (point(v) - centre) * (point(v) - centre).transpose();
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
-      dir = eig.eigenvectors().col(2);
+      std::vector<Eigen::Vector3d> points;
+      for (int v : kept) points.push_back(point(v));
+      const PrincipalAxes fit = FitPrincipalAxes(points);
+      centre = fit.centre;
+      dir = fit.Direction();
       std::vector<int> next;
       for (int v : kept) {
         const Eigen::Vector3d d = point(v) - centre;
@@ -420,14 +418,10 @@ StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& 
       std::vector<Eigen::Vector3d> on_plane = side_points[k];
       double rms = 0.0;
       for (int round = 0; round < 3; ++round) {
-        plane_centre[k].setZero();
-        for (const auto& q : on_plane) plane_centre[k] += q;
-        plane_centre[k] /= static_cast<double>(on_plane.size());
-        Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-        for (const auto& q : on_plane) scatter += (q - plane_centre[k]) * (q - plane_centre[k]).transpose();
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
-        plane_normal[k] = eig.eigenvectors().col(0);
-        rms = std::sqrt(std::max(0.0, eig.eigenvalues()(0)) / on_plane.size());
+        const PrincipalAxes fit = FitPrincipalAxes(on_plane);
+        plane_centre[k] = fit.centre;
+        plane_normal[k] = fit.Normal();
+        rms = std::sqrt(std::max(0.0, fit.eigenvalues(0)) / on_plane.size());
         if (rms <= 0.1 * h) break;
         std::vector<Eigen::Vector3d> closer;
         for (const auto& q : on_plane) {

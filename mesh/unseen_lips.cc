@@ -1,11 +1,12 @@
 #include "mesh/unseen_lips.h"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <unordered_map>
 #include <unordered_set>
+
+#include "mesh/principal_axes.h"
 
 namespace facets {
 namespace {
@@ -64,14 +65,10 @@ struct Plane {
 Plane FitRobustPlane(std::vector<Eigen::Vector3d> points) {
   Plane plane;
   for (int round = 0; round < 4 && points.size() >= 3; ++round) {
-    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-    for (const auto& p : points) centre += p;
-    centre /= static_cast<double>(points.size());
-    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-    for (const auto& p : points) scatter += (p - centre) * (p - centre).transpose();
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter);
+    const PrincipalAxes fit = FitPrincipalAxes(points);
+    const Eigen::Vector3d centre = fit.centre;
     plane.centre = centre;
-    plane.normal = eigen.eigenvectors().col(0);
+    plane.normal = fit.Normal();
     double sum = 0.0;
     std::vector<double> r;
     for (const auto& p : points) {

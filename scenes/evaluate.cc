@@ -7,7 +7,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -23,6 +22,7 @@
 #include <stdexcept>
 
 #include "io/colmap_io.h"
+#include "mesh/principal_axes.h"
 #include "visibility/embree_scene.h"
 
 namespace facets {
@@ -864,19 +864,13 @@ std::string EvaluationReport::Json(bool with_samples) const {
 PlaneFit FitPlane(const std::vector<Eigen::Vector3d>& points) {
   if (points.size() < 3) throw std::invalid_argument("FitPlane: fewer than 3 points");
   PlaneFit fit;
-  for (const auto& p : points) fit.centroid += p;
-  fit.centroid /= static_cast<double>(points.size());
-  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-  for (const auto& p : points) {
-    const Eigen::Vector3d q = p - fit.centroid;
-    scatter += q * q.transpose();
-  }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(scatter);
-  const Eigen::Vector3d ev = solver.eigenvalues();  // ascending
+  const PrincipalAxes principal = FitPrincipalAxes(points);
+  fit.centroid = principal.centre;
+  const Eigen::Vector3d ev = principal.eigenvalues;  // ascending
   if (!(ev(1) > 1e-12 * std::max(ev(2), 1e-300))) {
     throw std::invalid_argument("FitPlane: points are collinear or coincide");
   }
-  fit.normal = solver.eigenvectors().col(0).normalized();
+  fit.normal = principal.Normal().normalized();
   if (fit.normal.z() < 0) fit.normal = -fit.normal;
   double sum2 = 0;
   for (const auto& p : points) {
