@@ -116,6 +116,9 @@ struct ReconstructionOptions {
   // the block's thorough run).
   bool fold_lips = true;
   int fold_lips_local_rings = 2;
+  // A laid lip that makes triangles cross is untangled first (UntangleSelfIntersections,
+  // at most this many rounds; 0 = left at once) and left only when pairs remain.
+  int fold_lips_untangle_rounds = 4;
   double fold_lips_tolerance = 0.01;
   // After each level: triangle pairs that cross (between windows, after splits: the
   // fold guard only sees one window's step) are untangled by local smoothing of their
@@ -293,6 +296,7 @@ struct LevelReport {
   int lips_folded = 0;
   int lip_vertices_moved = 0;
   int lips_dropped = 0;
+  int lips_untangled = 0;  // of the kept ones, those whose crossing pairs were untangled first
   int crossing_untangled = 0;  // crossing pairs before the untangling (ReconstructionOptions::untangle)
   int untangle_moved = 0;      // vertices it moved
   // ReconstructionOptions::straighten_rounds: level runs after straightening kept and
