@@ -277,6 +277,7 @@ std::string ReconstructionReport::Json() const {
     l["lip_vertices_moved"] = level.lip_vertices_moved;
     l["lips_dropped"] = level.lips_dropped;
     l["lips_untangled"] = level.lips_untangled;
+    l["lips_flattened"] = level.lips_flattened;
     l["crossing_pairs_untangled"] = level.crossing_untangled;
     l["untangle_moved_vertices"] = level.untangle_moved;
     l["straighten_passes_kept"] = level.straighten_kept;
@@ -789,6 +790,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
         say("  level " + std::to_string(level) + " " + what + " " + std::to_string(round + 1) + ": " +
             std::to_string(straight.components) + " straight crease lines, " + std::to_string(straight.moved) +
             " vertices put on them (max " + std::to_string(straight.max_move) + " m, " +
+            std::to_string(straight.left_off) + " left off for folds, " +
             std::to_string(straight.flipped) + " faces of no area flipped); sigma0 " +
             std::to_string(now_sigma0) + " against " + std::to_string(was_sigma0) +
             (local_windows > 0 ? " (" + std::to_string(local_windows) + " local windows)" : "") +
@@ -847,9 +849,22 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
         // pairs where the laid lip meets its held ring (the far skirt of a shelf in front
         // of block_oblique's leaning wall, session 28) are smoothed out first.
         int crossing_now = CountSelfIntersections(mesh), folded_now = CountFoldedFaces(mesh);
+        // Faces folded where the laid sheet meets the held wall: their wall corners within
+        // the front tolerance go onto the plane (mesh/unseen_lips.h, FlattenFoldedRim).
+        int flattened = 0;
+        if (folded_now > folded) {
+          flattened = FlattenFoldedRim(&mesh, lip, FoldedFaces(before), lip_options.front_tolerance);
+          if (flattened > 0) {
+            UpdateVertexNormals(&mesh);
+            crossing_now = CountSelfIntersections(mesh);
+            folded_now = CountFoldedFaces(mesh);
+          }
+        }
         const int crossing_laid = crossing_now;
         int untangled = 0;
-        if (crossing_now > crossing && folded_now <= folded && options.fold_lips_untangle_rounds > 0) {
+        // Folds left after the flattening too: the untangling's first round smooths the
+        // corners of folded faces (session 29: a 5 m lip on block A's tall building left for 7).
+        if ((crossing_now > crossing || folded_now > folded) && options.fold_lips_untangle_rounds > 0) {
           const UntangleReport untangle = UntangleSelfIntersections(&mesh, options.fold_lips_untangle_rounds);
           UpdateVertexNormals(&mesh);
           crossing_now = untangle.pairs_after;
@@ -862,7 +877,9 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
           if (crossing_now != crossing_laid || untangled > 0) {
             line << " (" << crossing_now - crossing << " after untangling)";
           }
-          line << " and " << folded_now - folded << " folded faces, left";
+          line << " and " << folded_now - folded << " folded faces"
+               << (flattened > 0 ? " (" + std::to_string(flattened) + " wall vertices flattened)" : std::string())
+               << ", left";
           say(line.str());
           mesh = std::move(before);
           ++level_report.lips_dropped;
@@ -878,6 +895,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
              << (untangled > 0 ? ", " + std::to_string(crossing_laid - crossing) + " crossing pairs untangled, " +
                                      std::to_string(untangled) + " vertices moved"
                                : std::string())
+             << (flattened > 0 ? ", " + std::to_string(flattened) + " wall vertices flattened" : std::string())
              << "), "
              << (better ? "kept" : "dropped");
         say(line.str());
@@ -885,6 +903,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
           adjusted = std::move(re.level);
           ++level_report.lips_folded;
           if (untangled > 0) ++level_report.lips_untangled;
+          if (flattened > 0) ++level_report.lips_flattened;
           level_report.lip_vertices_moved += fold.vertices;
           crossing = CountSelfIntersections(mesh);
           folded = CountFoldedFaces(mesh);
@@ -933,7 +952,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       say("  level " + std::to_string(level) + ": " + std::to_string(untangled.pairs_before) +
           " crossing triangle pairs untangled in " + std::to_string(untangled.rounds) + " rounds (" +
           std::to_string(untangled.vertices_moved) + " vertices moved, " + std::to_string(untangled.pairs_after) +
-          " pairs left)");
+          " pairs left" + (untangled.kept_best_round ? ", from the round that left the fewest" : "") + ")");
     };
     untangle();
     // The polish (ReconstructionOptions::polish_robust_k): the finest level once more from

@@ -297,6 +297,7 @@ struct LevelReport {
   int lip_vertices_moved = 0;
   int lips_dropped = 0;
   int lips_untangled = 0;  // of the kept ones, those whose crossing pairs were untangled first
+  int lips_flattened = 0;  // of the kept ones, those whose folded rim was flattened first (FlattenFoldedRim)
   int crossing_untangled = 0;  // crossing pairs before the untangling (ReconstructionOptions::untangle)
   int untangle_moved = 0;      // vertices it moved
   // ReconstructionOptions::straighten_rounds: level runs after straightening kept and

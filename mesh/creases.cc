@@ -523,7 +523,6 @@ StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& 
       continue;
     }
     // Move, and undo the component's moves when a face turns over.
-    std::vector<std::pair<int, TinMesh::Point>> old;
     std::vector<int> faces;
     std::vector<Eigen::Vector3d> normal_before;
     for (int v : chain) {
@@ -532,104 +531,138 @@ StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& 
     std::sort(faces.begin(), faces.end());
     faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
     for (int f : faces) normal_before.push_back(UnitFaceNormal(*mesh, mesh->face_handle(f)));
-    double max_move = 0.0;
-    for (int v : chain) {
-      const auto vh = mesh->vertex_handle(v);
-      Eigen::Vector3d target = centre + along(v) * dir;
-      if (mesh->is_boundary(vh)) {
-        // A vertex on a straight stretch of the border slides along it to where the line
-        // crosses it (the region's rim stays where it is).
-        TinMesh::HalfedgeHandle out;
-        for (auto heh : mesh->voh_range(vh)) {
-          if (mesh->is_boundary(heh)) out = heh;
-        }
-        if (!out.is_valid()) continue;
-        const Eigen::Vector3d next = ToEigen(mesh->point(mesh->to_vertex_handle(out)));
-        const Eigen::Vector3d prev =
-            ToEigen(mesh->point(mesh->from_vertex_handle(mesh->prev_halfedge_handle(out))));
-        const Eigen::Vector3d p = point(v);
-        // Straight in the tangent plane (the rim bends in height where it crosses a ridge).
-        const Eigen::Vector3d n = ToEigen(mesh->normal(vh));
-        Eigen::Vector3d e1 = p - prev, e2 = next - p;
-        e1 -= e1.dot(n) * n;
-        e2 -= e2.dot(n) * n;
-        if (e1.normalized().dot(e2.normalized()) < 0.99) continue;
-        const Eigen::Vector3d u = (e1.normalized() + e2.normalized()).normalized();
-        const Eigen::Vector3d w0 = p - centre;
-        const double b = u.dot(dir), d = u.dot(w0), e = dir.dot(w0);
-        const double denom = 1.0 - b * b;
-        if (denom < 0.1) continue;
-        const double slide = (b * e - d) / denom, t = (e - b * d) / denom;
-        const Eigen::Vector3d on_rim = p + slide * u, on_line = centre + t * dir;
-        if (std::abs(slide) > 0.5 * h || (on_rim - on_line).norm() > 0.25 * h) continue;
-        // Along the rim, and along the normal to the line's height: the rim's plane.
-        target = on_rim + (on_line - on_rim).dot(n) * n;
-      }
-      old.emplace_back(v, mesh->point(vh));
-      max_move = std::max(max_move, (target - point(v)).norm());
-      mesh->set_point(vh, TinMesh::Point(target.x(), target.y(), target.z()));
-    }
-    // Where the chain zigzags through a face, all three of its corners are now on the
-    // line: a cap with no area, whose normal is rounding noise (it passes the fold test
-    // by chance) and whose G1 patch divides by its area (block, session 21: 36 crossing
-    // facet pairs). Its long edge is flipped to the vertex across it, off the line: two
-    // faces with area for one without, the chain's edges kept. A cap that cannot be
-    // flipped (on the border, the vertex across on the line too, or a flipped face
-    // turned) leaves the run as it was, as a fold does.
-    bool folded = false;
-    std::vector<TinMesh::EdgeHandle> cap_edges;
     auto normal_before_of = [&](TinMesh::FaceHandle fh) {
       const auto it = std::lower_bound(faces.begin(), faces.end(), fh.idx());
       return it != faces.end() && *it == fh.idx() ? normal_before[it - faces.begin()] : Eigen::Vector3d::Zero().eval();
     };
-    for (size_t i = 0; i < faces.size() && !folded; ++i) {
-      const auto fh = mesh->face_handle(faces[i]);
-      std::array<TinMesh::HalfedgeHandle, 3> by_length;
-      if (!DegenerateFace(*mesh, fh, kCapHeight, &by_length)) {
-        if (UnitFaceNormal(*mesh, fh).dot(normal_before[i]) < 0.5) folded = true;
+    // A chain that zigzags tightly across the line (a fine TIN over a ridge, issue 7's
+    // thorough runs) often has one vertex whose move would fold a face or make a cap
+    // that cannot be flipped; the run is not dropped for it: that vertex stays where it
+    // is and the rest go onto the line, up to a third of the chain left off.
+    std::vector<bool> stays(chain.size(), false);
+    const int max_left = static_cast<int>(chain.size()) / 3;
+    int left = 0;
+    bool done = false;
+    while (!done) {
+      std::vector<std::pair<int, TinMesh::Point>> old;
+      std::vector<double> moved_by;  // by chain position, 0 for vertices not moved
+      double max_move = 0.0;
+      for (size_t c = 0; c < chain.size(); ++c) {
+        moved_by.push_back(0.0);
+        if (stays[c]) continue;
+        const int v = chain[c];
+        const auto vh = mesh->vertex_handle(v);
+        Eigen::Vector3d target = centre + along(v) * dir;
+        if (mesh->is_boundary(vh)) {
+          // A vertex on a straight stretch of the border slides along it to where the line
+          // crosses it (the region's rim stays where it is).
+          TinMesh::HalfedgeHandle out;
+          for (auto heh : mesh->voh_range(vh)) {
+            if (mesh->is_boundary(heh)) out = heh;
+          }
+          if (!out.is_valid()) continue;
+          const Eigen::Vector3d next = ToEigen(mesh->point(mesh->to_vertex_handle(out)));
+          const Eigen::Vector3d prev =
+              ToEigen(mesh->point(mesh->from_vertex_handle(mesh->prev_halfedge_handle(out))));
+          const Eigen::Vector3d p = point(v);
+          // Straight in the tangent plane (the rim bends in height where it crosses a ridge).
+          const Eigen::Vector3d n = ToEigen(mesh->normal(vh));
+          Eigen::Vector3d e1 = p - prev, e2 = next - p;
+          e1 -= e1.dot(n) * n;
+          e2 -= e2.dot(n) * n;
+          if (e1.normalized().dot(e2.normalized()) < 0.99) continue;
+          const Eigen::Vector3d u = (e1.normalized() + e2.normalized()).normalized();
+          const Eigen::Vector3d w0 = p - centre;
+          const double b = u.dot(dir), d = u.dot(w0), e = dir.dot(w0);
+          const double denom = 1.0 - b * b;
+          if (denom < 0.1) continue;
+          const double slide = (b * e - d) / denom, t = (e - b * d) / denom;
+          const Eigen::Vector3d on_rim = p + slide * u, on_line = centre + t * dir;
+          if (std::abs(slide) > 0.5 * h || (on_rim - on_line).norm() > 0.25 * h) continue;
+          // Along the rim, and along the normal to the line's height: the rim's plane.
+          target = on_rim + (on_line - on_rim).dot(n) * n;
+        }
+        old.emplace_back(v, mesh->point(vh));
+        moved_by[c] = (target - point(v)).norm();
+        max_move = std::max(max_move, moved_by[c]);
+        mesh->set_point(vh, TinMesh::Point(target.x(), target.y(), target.z()));
+      }
+      // Where the chain zigzags through a face, all three of its corners are now on the
+      // line: a cap with no area, whose normal is rounding noise (it passes the fold test
+      // by chance) and whose G1 patch divides by its area (block, session 21: 36 crossing
+      // facet pairs). Its long edge is flipped to the vertex across it, off the line: two
+      // faces with area for one without, the chain's edges kept. A cap that cannot be
+      // flipped (on the border, the vertex across on the line too, or a flipped face
+      // turned) counts as a fold.
+      TinMesh::FaceHandle failed;
+      std::vector<TinMesh::EdgeHandle> cap_edges;
+      for (size_t i = 0; i < faces.size() && !failed.is_valid(); ++i) {
+        const auto fh = mesh->face_handle(faces[i]);
+        std::array<TinMesh::HalfedgeHandle, 3> by_length;
+        if (!DegenerateFace(*mesh, fh, kCapHeight, &by_length)) {
+          if (UnitFaceNormal(*mesh, fh).dot(normal_before[i]) < 0.5) failed = fh;
+          continue;
+        }
+        const auto longest = by_length[2];
+        const double long_edge = mesh->calc_edge_length(longest);
+        const auto edge = mesh->edge_handle(longest);
+        if (mesh->is_boundary(edge) || !mesh->is_flip_ok(edge)) {
+          failed = fh;
+          continue;
+        }
+        // Face (a, b, apex) and across the long edge (b, a, other); flipped: (a, other,
+        // apex) and (b, apex, other), each judged against both faces before the move.
+        const auto across = mesh->opposite_halfedge_handle(longest);
+        const Eigen::Vector3d a = ToEigen(mesh->point(mesh->from_vertex_handle(longest)));
+        const Eigen::Vector3d b = ToEigen(mesh->point(mesh->to_vertex_handle(longest)));
+        const Eigen::Vector3d apex =
+            ToEigen(mesh->point(mesh->to_vertex_handle(mesh->next_halfedge_handle(longest))));
+        const Eigen::Vector3d other =
+            ToEigen(mesh->point(mesh->to_vertex_handle(mesh->next_halfedge_handle(across))));
+        for (const Eigen::Vector3d& n : {Eigen::Vector3d((other - a).cross(apex - a)),
+                                         Eigen::Vector3d((apex - b).cross(other - b))}) {
+          if (NoArea(n.norm(), long_edge, kCapHeight)) {
+            failed = fh;
+            break;
+          }
+          for (auto face : {fh, mesh->face_handle(across)}) {
+            if (n.normalized().dot(normal_before_of(face)) < 0.5) failed = fh;
+          }
+        }
+        cap_edges.push_back(edge);
+      }
+      if (!failed.is_valid()) {
+        for (auto edge : cap_edges) {
+          mesh->flip(edge);
+          for (int side : {0, 1}) {
+            const auto fh = mesh->face_handle(mesh->halfedge_handle(edge, side));
+            mesh->set_normal(fh, mesh->calc_face_normal(fh));
+          }
+        }
+        report.flipped += static_cast<int>(cap_edges.size());
+        report.moved += static_cast<int>(old.size());
+        report.left_off += left;
+        report.max_move = std::max(report.max_move, max_move);
+        done = true;
         continue;
       }
-      const auto longest = by_length[2];
-      const double long_edge = mesh->calc_edge_length(longest);
-      const auto edge = mesh->edge_handle(longest);
-      if (mesh->is_boundary(edge) || !mesh->is_flip_ok(edge)) {
-        folded = true;
-        continue;
-      }
-      // Face (a, b, apex) and across the long edge (b, a, other); flipped: (a, other,
-      // apex) and (b, apex, other), each judged against both faces before the move.
-      const auto across = mesh->opposite_halfedge_handle(longest);
-      const Eigen::Vector3d a = ToEigen(mesh->point(mesh->from_vertex_handle(longest)));
-      const Eigen::Vector3d b = ToEigen(mesh->point(mesh->to_vertex_handle(longest)));
-      const Eigen::Vector3d apex = ToEigen(mesh->point(mesh->to_vertex_handle(mesh->next_halfedge_handle(longest))));
-      const Eigen::Vector3d other = ToEigen(mesh->point(mesh->to_vertex_handle(mesh->next_halfedge_handle(across))));
-      for (const Eigen::Vector3d& n : {Eigen::Vector3d((other - a).cross(apex - a)),
-                                       Eigen::Vector3d((apex - b).cross(other - b))}) {
-        if (NoArea(n.norm(), long_edge, kCapHeight)) {
-          folded = true;
-          break;
-        }
-        for (auto face : {fh, mesh->face_handle(across)}) {
-          if (n.normalized().dot(normal_before_of(face)) < 0.5) folded = true;
-        }
-      }
-      cap_edges.push_back(edge);
-    }
-    if (folded) {
       for (const auto& [v, p] : old) mesh->set_point(mesh->vertex_handle(v), p);
-      ++report.rejected;
-      continue;
-    }
-    for (auto edge : cap_edges) {
-      mesh->flip(edge);
-      for (int side : {0, 1}) {
-        const auto fh = mesh->face_handle(mesh->halfedge_handle(edge, side));
-        mesh->set_normal(fh, mesh->calc_face_normal(fh));
+      // The failed face's corner that moved most stays where it was, and the run is tried again.
+      int worst = -1;
+      for (auto fv : mesh->fv_range(failed)) {
+        const auto it = std::find(chain.begin(), chain.end(), fv.idx());
+        if (it == chain.end()) continue;
+        const size_t c = it - chain.begin();
+        if (!stays[c] && moved_by[c] > 0.0 && (worst < 0 || moved_by[c] > moved_by[worst])) worst = static_cast<int>(c);
       }
+      if (worst < 0 || left == max_left) {
+        ++report.rejected;
+        done = true;
+        continue;
+      }
+      stays[worst] = true;
+      ++left;
     }
-    report.flipped += static_cast<int>(cap_edges.size());
-    report.moved += static_cast<int>(old.size());
-    report.max_move = std::max(report.max_move, max_move);
   }
   if (report.moved > 0) UpdateVertexNormals(mesh);
   return report;

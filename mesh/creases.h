@@ -75,16 +75,19 @@ constexpr double kSteepCreaseSideDeg = 60.0;
 // of its ends, leaving the junction), each step to the neighbour that advances
 // along the line by at least a third of an edge and lies closest to it, within
 // max_offset edges; its vertices go onto the line, a border vertex by sliding along a
-// straight stretch of the border to where the line crosses it. A run is left as it was
-// when a face next to a moved vertex would turn by more than 60 degrees. A face whose
+// straight stretch of the border to where the line crosses it. A face whose
 // three corners all went onto the line (the chain zigzags through it) has its long
 // edge flipped to the vertex across it (the vertex and face counts stay; the flipped
-// faces' indices are those of the two faces before); the run is left when it cannot be.
+// faces' indices are those of the two faces before). When a face would fold (turn by more
+// than 60 degrees) or a cap cannot be flipped, the corner of that face that moved most stays
+// where it was and the run is tried again; the run is left when a third of its chain would stay.
 // Vertex normals are updated when anything moved.
 struct StraightenReport {
   int components = 0;  // straight crease lines found
   int moved = 0;       // vertices put on their line
   int rejected = 0;    // components left because a face would fold (or a cap could not be flipped)
+                       // with a third of their chain already left off
+  int left_off = 0;    // chain vertices of taken lines kept where they were, so that no face folds
   int flipped = 0;     // faces with no area (all three corners on the line) whose long edge was flipped
   double max_move = 0.0;
   // Why the other sets and runs were left (each counts once, at its first failing test):

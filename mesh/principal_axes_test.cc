@@ -10,7 +10,7 @@
 namespace facets {
 namespace {
 
-// Points on a 4 x 2 grid in a tilted plane: the smallest axis is the plane's normal,
+// Points on a 5 x 3 grid (2 m by 1 m steps) in a tilted plane: the smallest axis is the plane's normal,
 // the largest runs along the grid's long side, the eigenvalues are the sums of squares.
 TEST(PrincipalAxesTest, PlaneNormalAndLineDirectionOfAGrid) {
   const Eigen::Vector3d u = Eigen::Vector3d(1, 1, 0).normalized();

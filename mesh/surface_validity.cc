@@ -192,7 +192,19 @@ UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds) {
   UntangleReport report;
   std::set<std::pair<int, int>> pairs = SelfIntersectingPairs(*mesh, Points(*mesh));
   report.pairs_before = report.pairs_after = static_cast<int>(pairs.size());
-  std::vector<bool> ever_moved(mesh->n_vertices(), false);
+  // The smoothing can spread a tangle instead of undoing it (block A default, session 28:
+  // 45 pairs before the finest level's untangling, 68 after): the points of the round with
+  // the fewest pairs (the later of equals) are what it returns.
+  const std::vector<Eigen::Vector3d> original = Points(*mesh);
+  std::vector<Eigen::Vector3d> best = original;
+  size_t best_pairs = pairs.size();
+  auto remember_if_best = [&]() {
+    report.pairs_after = static_cast<int>(pairs.size());
+    if (pairs.size() <= best_pairs) {
+      best_pairs = pairs.size();
+      best = Points(*mesh);
+    }
+  };
   // Folded faces give G1 patches that curl through their neighbours' even where the
   // chord triangles do not cross: their corners are smoothed in the first round too.
   const std::vector<bool> folded = FoldedFaces(*mesh);
@@ -207,9 +219,9 @@ UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds) {
       }
     }
     // A crossing that survived smoothing its own corners needs a wider patch.
-    for (int v : SmoothRegion(mesh, CrossingRegion(*mesh, pairs, round - 1, std::move(seed)), 3)) ever_moved[v] = true;
+    SmoothRegion(mesh, CrossingRegion(*mesh, pairs, round - 1, std::move(seed)), 3);
     pairs = SelfIntersectingPairs(*mesh, Points(*mesh));
-    report.pairs_after = static_cast<int>(pairs.size());
+    remember_if_best();
   }
   // A pleat (a strip of faces folded flat over its neighbours, where one image or none
   // sees the surface) outlasts three sweeps a round: its vertices need the smoothing
@@ -219,11 +231,16 @@ UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds) {
     report.rounds = max_rounds + extra;
     const int sweeps = 3 * (extra + 1) * (extra + 1);
     const std::vector<bool> region = CrossingRegion(*mesh, pairs, extra, std::vector<bool>(mesh->n_vertices(), false));
-    for (int v : SmoothRegion(mesh, region, sweeps)) ever_moved[v] = true;
+    SmoothRegion(mesh, region, sweeps);
     pairs = SelfIntersectingPairs(*mesh, Points(*mesh));
-    report.pairs_after = static_cast<int>(pairs.size());
+    remember_if_best();
   }
-  report.vertices_moved = static_cast<int>(std::count(ever_moved.begin(), ever_moved.end(), true));
+  if (static_cast<size_t>(report.pairs_after) > best_pairs) {
+    for (auto vh : mesh->vertices()) mesh->set_point(vh, ToOpenMesh(best[vh.idx()]));
+    report.pairs_after = static_cast<int>(best_pairs);
+    report.kept_best_round = true;
+  }
+  for (auto vh : mesh->vertices()) report.vertices_moved += best[vh.idx()] != original[vh.idx()] ? 1 : 0;
   return report;
 }
 

@@ -61,12 +61,14 @@ void CopyStepFields(const GuardedStep& step, Report* report) {
 // round), until no pair crosses or `max_rounds` is spent; then, if pairs are left, up
 // to `max_rounds` more rounds over the crossings grown by k rings with 3 (k + 1)^2
 // sweeps (a pleat folded flat needs the smoothing near convergence). Boundary vertices stay.
+// The points of the round that left the fewest pairs are kept (never more than before).
 // Vertex normals are not updated (the caller does). Returns the crossing pairs left.
 struct UntangleReport {
   int pairs_before = 0;
   int pairs_after = 0;
   int rounds = 0;
-  int vertices_moved = 0;  // distinct vertices moved over all rounds
+  int vertices_moved = 0;  // vertices that end elsewhere than they began
+  bool kept_best_round = false;  // the last round left more pairs than an earlier one, whose points were restored
 };
 UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds = 8);
 

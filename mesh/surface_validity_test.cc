@@ -125,5 +125,22 @@ TEST(SurfaceValidity, PleatFoldedFlatIsOpened) {
   EXPECT_LE(report.vertices_moved, 100);
 }
 
+// The smoothing can spread a tangle rather than undo it (block A default, session 28:
+// 45 pairs before the finest level's untangling, 68 after). The same pleat given one
+// round (two with the extra one): 12 pairs after it (measured with session 28's build),
+// one more than it came with; the surface returned is the best round's, here the one
+// it came with.
+TEST(SurfaceValidity, UntanglingNeverLeavesMorePairsThanItFound) {
+  TinMesh mesh = LoadStartMesh(std::string(FACETS_SOURCE_DIR) + "/tests/data/pleat_patch.ply");
+  const std::vector<Eigen::Vector3d> before = Points(mesh);
+  const UntangleReport report = UntangleSelfIntersections(&mesh, 1);
+  EXPECT_EQ(report.pairs_before, 11);
+  EXPECT_EQ(report.pairs_after, 11);
+  EXPECT_EQ(CountSelfIntersections(mesh), 11);
+  EXPECT_TRUE(report.kept_best_round);
+  EXPECT_EQ(report.vertices_moved, 0);
+  EXPECT_EQ(Points(mesh), before);
+}
+
 }  // namespace
 }  // namespace facets

@@ -7,6 +7,7 @@
 #include <unordered_set>
 
 #include "mesh/principal_axes.h"
+#include "mesh/surface_validity.h"
 
 namespace facets {
 namespace {
@@ -253,6 +254,30 @@ LipFold LayLipOntoWall(TinMesh* mesh, const UnseenLip& lip, int iterations) {
     mesh->set_point(mesh->vertex_handle(verts[i]), ToOpenMesh(p));
   }
   return fold;
+}
+
+int FlattenFoldedRim(TinMesh* mesh, const UnseenLip& lip, const std::vector<bool>& folded_before, double reach,
+                     int rounds) {
+  const std::unordered_set<int> in_lip(lip.vertices.begin(), lip.vertices.end());
+  int projected = 0;
+  for (int round = 0; round < rounds; ++round) {
+    const std::vector<bool> folded = FoldedFaces(*mesh);
+    int moved = 0;
+    for (auto fh : mesh->faces()) {
+      if (!folded[fh.idx()] || folded_before[fh.idx()]) continue;
+      for (auto vh : mesh->fv_range(fh)) {
+        if (in_lip.count(vh.idx()) > 0) continue;
+        const Eigen::Vector3d p = ToEigen(mesh->point(vh));
+        const double d = (p - lip.plane_point).dot(lip.plane_normal);
+        if (std::abs(d) < 1e-9 || std::abs(d) > reach) continue;
+        mesh->set_point(vh, ToOpenMesh(Eigen::Vector3d(p - d * lip.plane_normal)));
+        ++moved;
+      }
+    }
+    projected += moved;
+    if (moved == 0) break;
+  }
+  return projected;
 }
 
 LipFoldReport FoldUnseenLipsOntoWalls(TinMesh* mesh, const std::vector<int>& views, const LipFoldOptions& options) {

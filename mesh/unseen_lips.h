@@ -105,6 +105,17 @@ struct LipFold {
 // fold over itself. Only the lip's vertices move; vertex normals are not updated.
 LipFold LayLipOntoWall(TinMesh* mesh, const UnseenLip& lip, int iterations = 2000);
 
+// A laid lip whose sheet meets the held wall at a small crumple folds a face or two
+// there (the held ring is where the images put it, a few cm off the fitted plane; block
+// A thorough, session 29: a 5 m lip of 146 vertices left for 1-2 such faces). The corners
+// of faces folded now but not in folded_before (FoldedFaces, by face index) that are
+// not the lip's and lie within reach of the wall plane (the caller: the lip's front
+// tolerance, within which a vertex counts as the wall's) are projected onto it; up to
+// `rounds` times while any moves. Returns the vertices projected; vertex normals are
+// not updated.
+int FlattenFoldedRim(TinMesh* mesh, const UnseenLip& lip, const std::vector<bool>& folded_before, double reach,
+                     int rounds = 3);
+
 // Both, every lip found laid down (the engine lays and judges them one at a time).
 struct LipFoldReport {
   std::vector<LipFold> lips;

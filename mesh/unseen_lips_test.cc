@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <tuple>
 
 #include "mesh/surface_validity.h"
 
@@ -139,6 +140,55 @@ TEST(UnseenLips, APocketBehindTheWallIsLaidOntoItAndTheSeenRoofStays) {
   }
   EXPECT_EQ(CountFoldedFaces(mesh), 0);
   EXPECT_EQ(CountSelfIntersections(mesh), 0);
+}
+
+// Where a laid lip meets the held wall just under the roof, the Tutte embedding can
+// leave a sliver: a lip vertex almost on the line of two held ones. The sliver's normal
+// then comes from the held vertices' few cm off the fitted plane, not from its area, and
+// turns against the wall and roof beside it (block A thorough, session 29: one such face
+// left a 5 m lip standing). Here: a flat wall (h 0.5) whose top-row lip vertex (y 5,
+// z 9.5) was laid 5 mm under the roof edge, between the edge vertices at y 5 and 5.5; the
+// edge vertex at y 5 stands 4 cm in front of the plane.
+TEST(UnseenLips, AFoldWhereTheLaidLipMeetsTheHeldWallIsFlattenedOntoThePlane) {
+  constexpr double kOffset = 0.04;
+  auto laid = []() {
+    TinMesh mesh = WallWithLip(0.0);
+    constexpr int kRow = 21;  // vertices per profile step (y 0 .. 10 at 0.5)
+    const auto lip_vertex = mesh.vertex_handle(31 * kRow + 10);   // x 0, y 5, z 9.5
+    const auto edge_vertex = mesh.vertex_handle(32 * kRow + 10);  // x 0, y 5, z 10: the roof's edge
+    EXPECT_NEAR(mesh.point(lip_vertex)[2], 9.5, 1e-9);
+    EXPECT_NEAR(mesh.point(edge_vertex)[2], 10.0, 1e-9);
+    mesh.set_point(lip_vertex, TinMesh::Point(0.0, 5.25, 9.995));
+    return std::make_tuple(mesh, lip_vertex, edge_vertex);
+  };
+  UnseenLip lip;
+  lip.plane_point = Eigen::Vector3d::Zero();
+  lip.plane_normal = Eigen::Vector3d::UnitX();
+  for (const double reach : {0.05, 0.03}) {
+    auto [mesh, lip_vertex, edge_vertex] = laid();
+    lip.vertices = {lip_vertex.idx()};
+    const std::vector<bool> folded_before = FoldedFaces(mesh);
+    const int before = CountFoldedFaces(mesh);
+    auto p = mesh.point(edge_vertex);
+    p[0] = kOffset;
+    mesh.set_point(edge_vertex, p);
+    const TinMesh crumpled = mesh;
+    ASSERT_GT(CountFoldedFaces(mesh), before);  // the sliver turned against wall and roof
+    const int flattened = FlattenFoldedRim(&mesh, lip, folded_before, reach);
+    if (reach > kOffset) {
+      EXPECT_EQ(flattened, 1);
+      EXPECT_NEAR(mesh.point(edge_vertex)[0], 0.0, 1e-12);
+      EXPECT_EQ(CountFoldedFaces(mesh), before);
+    } else {
+      // Beyond reach the vertex is the images', not the plane's: left, and the fold stays.
+      EXPECT_EQ(flattened, 0);
+      EXPECT_GT(CountFoldedFaces(mesh), before);
+    }
+    // Only that vertex may move; the lip's own vertex never does.
+    for (auto v : mesh.vertices()) {
+      if (v != edge_vertex) EXPECT_EQ(mesh.point(v), crumpled.point(v)) << "vertex " << v.idx();
+    }
+  }
 }
 
 TEST(UnseenLips, ASeenLipAndALipWithoutAWallAreLeftAlone) {

@@ -103,6 +103,10 @@ TEST(Walls, BlockBuildingIsValidAndFlagsTheWallOneImageSees) {
 // thread count), and the surface stays free of crossings. Rounds on level 0 as well, kept
 // whatever sigma0 does (`--normal-search-rounds-last-level 0 --normal-search-tolerance 1`),
 // stand more of them up (87.9 % against 82.0 %; before the propagation 79.7 against 68.5 %).
+// Session 29 (folding straightening vertices left off, folded lip rims flattened): 91.4 % with
+// both, 65.5 % without the propagation, 45.9 % with neither, 93.4 % with the rounds; the rounds'
+// gain shrank to +2 points because the run without them improved, so the rounds are held to an
+// absolute bound and to not losing walls rather than to a fixed gain.
 TEST(Walls, NormalSearchStandsTheTallBuildingsWallsUp) {
   const RenderedScene scene = RenderAndRead("scenes/data/block.json", testing::TempDir() + "/facets_walls_tall");
   RegionOfInterest roi;
@@ -146,12 +150,13 @@ TEST(Walls, NormalSearchStandsTheTallBuildingsWallsUp) {
             << rounds.walls << " with rounds on level 0 (" << rounds.finest_rounds << " kept); crossing pairs "
             << with.crossing << " / " << no_planes.crossing << " / " << without.crossing << " / " << rounds.crossing
             << "\n";
-  EXPECT_GT(with.walls, 0.6);
+  EXPECT_GT(with.walls, 0.85);
   EXPECT_GT(with.walls, without.walls + 0.2);
   EXPECT_EQ(with.crossing, 0);
   EXPECT_EQ(with.finest_rounds, 0);
   EXPECT_EQ(rounds.finest_rounds, 2);
-  EXPECT_GT(rounds.walls, with.walls + 0.03);
+  EXPECT_GT(rounds.walls, 0.9);
+  EXPECT_GT(rounds.walls, with.walls);
   EXPECT_EQ(rounds.crossing, 0);
   // Plane propagation (engine/plane_propagation.h, default since session 13).
   EXPECT_GT(with.walls, no_planes.walls + 0.07);
