@@ -186,7 +186,9 @@ TEST(UnseenLips, AFoldWhereTheLaidLipMeetsTheHeldWallIsFlattenedOntoThePlane) {
     }
     // Only that vertex may move; the lip's own vertex never does.
     for (auto v : mesh.vertices()) {
-      if (v != edge_vertex) EXPECT_EQ(mesh.point(v), crumpled.point(v)) << "vertex " << v.idx();
+      if (v != edge_vertex) {
+        EXPECT_EQ(mesh.point(v), crumpled.point(v)) << "vertex " << v.idx();
+      }
     }
   }
 }
