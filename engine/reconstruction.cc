@@ -280,6 +280,7 @@ std::string ReconstructionReport::Json() const {
     l["lips_flattened"] = level.lips_flattened;
     l["crossing_pairs_untangled"] = level.crossing_untangled;
     l["untangle_moved_vertices"] = level.untangle_moved;
+    l["untangle_membranes"] = level.untangle_membranes;
     l["straighten_passes_kept"] = level.straighten_kept;
     l["straighten_passes_dropped"] = level.straighten_dropped;
     l["straightened_vertices"] = level.straightened;
@@ -948,11 +949,14 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       UpdateVertexNormals(&mesh);
       level_report.crossing_untangled += untangled.pairs_before;
       level_report.untangle_moved += untangled.vertices_moved;
+      level_report.untangle_membranes += untangled.membranes;
       if (level == finest) update_products_surface();
       say("  level " + std::to_string(level) + ": " + std::to_string(untangled.pairs_before) +
           " crossing triangle pairs untangled in " + std::to_string(untangled.rounds) + " rounds (" +
-          std::to_string(untangled.vertices_moved) + " vertices moved, " + std::to_string(untangled.pairs_after) +
-          " pairs left" + (untangled.kept_best_round ? ", from the round that left the fewest" : "") + ")");
+          std::to_string(untangled.vertices_moved) + " vertices moved, " +
+          (untangled.membranes > 0 ? std::to_string(untangled.membranes) + " membranes, " : "") +
+          std::to_string(untangled.pairs_after) + " pairs left" +
+          (untangled.kept_best_round ? ", from the round that left the fewest" : "") + ")");
     };
     untangle();
     // The polish (ReconstructionOptions::polish_robust_k): the finest level once more from

@@ -300,6 +300,7 @@ struct LevelReport {
   int lips_flattened = 0;  // of the kept ones, those whose folded rim was flattened first (FlattenFoldedRim)
   int crossing_untangled = 0;  // crossing pairs before the untangling (ReconstructionOptions::untangle)
   int untangle_moved = 0;      // vertices it moved
+  int untangle_membranes = 0;  // membranes it solved where the smoothing rounds left pairs
   // ReconstructionOptions::straighten_rounds: level runs after straightening kept and
   // dropped (the level's report is the last kept run's), vertices moved in the kept ones.
   int straighten_kept = 0;

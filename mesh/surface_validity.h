@@ -58,15 +58,20 @@ void CopyStepFields(const GuardedStep& step, Report* report) {
 // Repair of crossings the per-window fold guard cannot see (between windows, after
 // splits): the vertices of crossing triangles, and from round 2 on their rings grown by
 // one per round, move halfway to the mean of their neighbours (three Jacobi sweeps per
-// round), until no pair crosses or `max_rounds` is spent; then, if pairs are left, up
-// to `max_rounds` more rounds over the crossings grown by k rings with 3 (k + 1)^2
-// sweeps (a pleat folded flat needs the smoothing near convergence). Boundary vertices stay.
-// The points of the round that left the fewest pairs are kept (never more than before).
+// round), until no pair crosses or `max_rounds` is spent. Pairs still left: each tangle
+// (crossings a ring or two apart) gets a membrane, the uniform Laplacian solved over it
+// grown by 1..4 rings with the ring around held, the first that leaves fewer pairs kept,
+// repeated up to `max_rounds` times while that helps (a strip collapsed onto a line stays
+// on it under sweeps). Then, if pairs are left, up to `max_rounds` more rounds over the
+// crossings grown by k rings with 3 (k + 1)^2 sweeps (near convergence; these sag what
+// lies in their regions, hence last). Boundary vertices stay. The points of the round or
+// membrane that left the fewest pairs are kept (never more than before).
 // Vertex normals are not updated (the caller does). Returns the crossing pairs left.
 struct UntangleReport {
   int pairs_before = 0;
   int pairs_after = 0;
-  int rounds = 0;
+  int rounds = 0;          // smoothing rounds, the long ones counted after the first max_rounds
+  int membranes = 0;       // membranes solved (kept or not)
   int vertices_moved = 0;  // vertices that end elsewhere than they began
   bool kept_best_round = false;  // the last round left more pairs than an earlier one, whose points were restored
 };
