@@ -4,6 +4,7 @@
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
 
+#include <Eigen/Geometry>
 #include <Eigen/Sparse>
 
 #include <algorithm>
@@ -37,8 +38,9 @@ std::vector<Eigen::Vector3d> Points(const TinMesh& mesh) {
   return points;
 }
 
-std::set<std::pair<int, int>> SelfIntersectingPairs(const TinMesh& mesh,
-                                                    const std::vector<Eigen::Vector3d>& points) {
+// The crossing pairs among `faces` (all faces when null).
+std::set<std::pair<int, int>> CrossingPairsAmong(const TinMesh& mesh, const std::vector<Eigen::Vector3d>& points,
+                                                 const std::vector<int>* faces) {
   CgalMesh cgal;
   for (auto v : mesh.vertices()) {
     const Eigen::Vector3d& p = points[v.idx()];
@@ -52,13 +54,25 @@ std::set<std::pair<int, int>> SelfIntersectingPairs(const TinMesh& mesh,
     cgal.add_face(t[0], t[1], t[2]);
   }
   std::vector<std::pair<CgalMesh::Face_index, CgalMesh::Face_index>> pairs;
-  CGAL::Polygon_mesh_processing::self_intersections(cgal, std::back_inserter(pairs));
+  if (faces) {
+    std::vector<CgalMesh::Face_index> range;
+    range.reserve(faces->size());
+    for (int f : *faces) range.emplace_back(static_cast<CgalMesh::size_type>(f));
+    CGAL::Polygon_mesh_processing::self_intersections(range, cgal, std::back_inserter(pairs));
+  } else {
+    CGAL::Polygon_mesh_processing::self_intersections(cgal, std::back_inserter(pairs));
+  }
   std::set<std::pair<int, int>> result;
   for (const auto& [a, b] : pairs) {
     const int i = static_cast<int>(a), j = static_cast<int>(b);
     result.emplace(std::min(i, j), std::max(i, j));
   }
   return result;
+}
+
+std::set<std::pair<int, int>> SelfIntersectingPairs(const TinMesh& mesh,
+                                                    const std::vector<Eigen::Vector3d>& points) {
+  return CrossingPairsAmong(mesh, points, nullptr);
 }
 
 bool Folded(const TinMesh& mesh, const std::vector<Eigen::Vector3d>& normals, TinMesh::FaceHandle f) {
@@ -221,6 +235,27 @@ std::vector<std::set<std::pair<int, int>>> Tangles(const TinMesh& mesh, const st
   return tangles;
 }
 
+// The faces a membrane over `region` can have changed the crossings of: those whose box,
+// at the points `before` or now, meets the box of the region's vertices and their ring
+// at either. Every face the membrane moved has its corners in that box, so every face
+// that crosses one of them, before or after, meets the box too.
+std::vector<int> FacesNearRegion(const TinMesh& mesh, const std::vector<bool>& region,
+                                 const std::vector<Eigen::Vector3d>& before) {
+  Eigen::AlignedBox3d box;
+  for (auto v : mesh.vertices()) {
+    if (!region[v.idx()]) continue;
+    box.extend(before[v.idx()]).extend(ToEigen(mesh.point(v)));
+    for (auto w : mesh.vv_range(v)) box.extend(before[w.idx()]).extend(ToEigen(mesh.point(w)));
+  }
+  std::vector<int> faces;
+  for (auto f : mesh.faces()) {
+    Eigen::AlignedBox3d face_box;
+    for (auto v : mesh.fv_range(f)) face_box.extend(before[v.idx()]).extend(ToEigen(mesh.point(v)));
+    if (face_box.intersects(box)) faces.push_back(f.idx());
+  }
+  return faces;
+}
+
 // The free vertices of `region` (not on the border) put where the uniform Laplacian
 // vanishes, the vertices around the region held: the converged limit of SmoothRegion,
 // solved at once. A strip collapsed onto a line (all its vertices and most of their
@@ -321,11 +356,20 @@ UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds) {
       for (const std::set<std::pair<int, int>>& tangle : Tangles(*mesh, pairs)) {
         for (int rings = 1; rings <= kMaxMembraneRings; ++rings) {
           const std::vector<Eigen::Vector3d> before = Points(*mesh);
-          if (!SolveMembrane(mesh, CrossingRegion(*mesh, tangle, rings, std::vector<bool>(mesh->n_vertices(), false)))) {
-            continue;
-          }
+          const std::vector<bool> region =
+              CrossingRegion(*mesh, tangle, rings, std::vector<bool>(mesh->n_vertices(), false));
+          if (!SolveMembrane(mesh, region)) continue;
           ++report.membranes;
-          std::set<std::pair<int, int>> now = SelfIntersectingPairs(*mesh, Points(*mesh));
+          // The pairs recounted among the faces near the region only (a tangle may get
+          // up to 4 membranes a round: whole-mesh passes would cost seconds each time on
+          // a tangled finest level); the pairs elsewhere are what they were.
+          const std::vector<int> near = FacesNearRegion(*mesh, region, before);
+          std::vector<bool> in_near(mesh->n_faces(), false);
+          for (int f : near) in_near[f] = true;
+          std::set<std::pair<int, int>> now = CrossingPairsAmong(*mesh, Points(*mesh), &near);
+          for (const auto& pair : pairs) {
+            if (!in_near[pair.first] || !in_near[pair.second]) now.insert(pair);
+          }
           if (now.size() >= pairs.size()) {
             for (auto vh : mesh->vertices()) mesh->set_point(vh, ToOpenMesh(before[vh.idx()]));
             continue;
