@@ -127,6 +127,8 @@ struct ReconstructArgs {
   bool no_fold_guard = false;
   bool no_relax_unseen = false;
   bool no_fold_lips = false;
+  bool wall_corners = false;  // set by --wall-corners or the --thorough-walls bundle
+  bool no_wall_corners = false;
   bool no_untangle = false;
   bool keep_crossing_facets = false;
   bool sector_regularisation = false;
@@ -154,7 +156,8 @@ void RunReconstruct(const ReconstructArgs& args) {
     std::ostringstream bundle;
     bundle << "settings: --thorough-walls: " << args.v_cycles << " v-cycle(s), normal-search rounds in them down to level "
            << args.v_cycle_rounds_last_level << ", tolerance " << args.normal_search_tolerance << ", local rings "
-           << args.normal_search_local_rings << ", grey facets of " << args.facet_pixels << " pixels";
+           << args.normal_search_local_rings << ", grey facets of " << args.facet_pixels << " pixels"
+           << (args.wall_corners && !args.no_wall_corners ? ", vertical corners laid onto their walls" : "");
     say(bundle.str());
   }
   ImageBlock block;
@@ -281,6 +284,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.adjustment.fold_guard = !args.no_fold_guard;
   options.relax_unseen = !args.no_relax_unseen;
   options.fold_lips = !args.no_fold_lips;
+  options.wall_corners = args.wall_corners && !args.no_wall_corners;
   options.untangle = !args.no_untangle;
   options.flatten_crossing_facets = !args.keep_crossing_facets;
   options.adjustment.sector_regularisation = args.sector_regularisation;
@@ -658,10 +662,16 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_flag("--no-rasters", args->no_rasters, "do not write ortho.tif, dsm.tif, sigma.tif");
   sub->add_flag("--no-preview", args->no_preview, "do not write preview.png");
   sub->add_flag("--keep-levels", args->keep_levels, "also write each level's TIN as levels/level_K.ply (K = pyramid level)");
+  auto* corners_on = sub->add_flag(
+      "--wall-corners", args->wall_corners,
+      "finest level: split the edges walls stretched, then lay each vertical corner's band onto its two walls and "
+      "their line, kept when the images agree (on with --thorough-walls)");
+  sub->add_flag("--no-wall-corners", args->no_wall_corners, "no corner laying, also with --thorough-walls")
+      ->excludes(corners_on);
   sub->add_flag("--thorough-walls", args->thorough_walls,
                 "walls (issue 7): 1.5-pixel facets and one V-cycle with normal-search rounds down to level 0, "
                 "re-adjusted locally (--facet-pixels 1.5 --v-cycles 1 --v-cycle-rounds-last-level 0 "
-                "--normal-search-tolerance 1 --normal-search-local-rings 1, each unless given); about 7x the time");
+                "--normal-search-tolerance 1 --normal-search-local-rings 1 --wall-corners, each unless given); about 7x the time");
   sub->callback([args, sub] {
     try {
       std::map<std::string, std::string> bundled;  // option -> value the bundle set
@@ -677,6 +687,7 @@ void AddReconstructCommand(CLI::App& app) {
         bundle("normal-search-tolerance", "1", &args->normal_search_tolerance, 1.0);
         bundle("normal-search-local-rings", "1", &args->normal_search_local_rings, 1);
         bundle("facet-pixels", "1.5", &args->facet_pixels, 1.5);
+        if (!args->no_wall_corners) bundle("wall-corners", "true", &args->wall_corners, true);
       }
       args->settings = SettingsFile(*sub, bundled);
       RunReconstruct(*args);

@@ -20,6 +20,7 @@
 #include "mesh/subdivision.h"
 #include "mesh/surface_validity.h"
 #include "mesh/unseen_lips.h"
+#include "mesh/wall_corners.h"
 
 namespace facets {
 namespace {
@@ -181,6 +182,8 @@ void ReconstructionOptions::Check() const {
   if (straighten_local_rings < -1) fail("straighten_local_rings must be >= -1");
   if (!(straighten_tolerance >= 0.0 && straighten_tolerance <= 1.0)) fail("straighten_tolerance must lie in 0..1");
   if (v_cycle_rounds_last_level < -1) fail("v_cycle_rounds_last_level must be >= -1");
+  if (wall_corners_local_rings < -1) fail("wall_corners_local_rings must be >= -1");
+  if (!(wall_corners_tolerance >= 0.0 && wall_corners_tolerance <= 1.0)) fail("wall_corners_tolerance must lie in 0..1");
   if (v_cycles > 0 && v_cycle_level < 1) fail("v_cycle_level must be >= 1 (a level above the finest)");
   if (!(v_cycle_robust_k >= 0.0)) fail("v_cycle_robust_k must be >= 0");
   if (v_cycle_robust_k > 0.0 && !(v_cycle_reject_k > v_cycle_robust_k)) fail("v_cycle_reject_k must exceed v_cycle_robust_k");
@@ -276,6 +279,11 @@ std::string ReconstructionReport::Json() const {
     l["lips_folded"] = level.lips_folded;
     l["lip_vertices_moved"] = level.lip_vertices_moved;
     l["lips_dropped"] = level.lips_dropped;
+    l["corner_splits"] = level.corner_splits;
+    l["corners_found"] = level.corners_found;
+    l["corners_laid"] = level.corners_laid;
+    l["corner_vertices_moved"] = level.corner_vertices_moved;
+    l["corners_dropped"] = level.corners_dropped;
     l["lips_untangled"] = level.lips_untangled;
     l["lips_flattened"] = level.lips_flattened;
     l["crossing_pairs_untangled"] = level.crossing_untangled;
@@ -718,6 +726,85 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       }
       return r;
     };
+    auto lay_wall_corners = [&]() {
+      QualityOptions quality;
+      quality.target_edge_length = edge_length(level);
+      quality.max_rounds = 2;
+      if (CountLongEdges(mesh, quality) > 0) {
+        // Splits at G1 midpoints barely change the surface, but a crumpled wall can make
+        // triangles cross: untangled, or the level keeps its triangles.
+        const TinMesh before_split = mesh;
+        const int crossing_before = CountSelfIntersections(mesh);
+        const QualityReport split = QualityPass(&mesh, quality);
+        UpdateVertexNormals(&mesh);
+        int crossing_after = CountSelfIntersections(mesh);
+        if (crossing_after > crossing_before && options.fold_lips_untangle_rounds > 0) {
+          crossing_after = UntangleSelfIntersections(&mesh, options.fold_lips_untangle_rounds).pairs_after;
+          UpdateVertexNormals(&mesh);
+        }
+        if (crossing_after > crossing_before) {
+          mesh = before_split;
+          say("  level " + std::to_string(level) + " corners: splitting the stretched edges made " +
+              std::to_string(crossing_after - crossing_before) + " crossing pairs, left");
+        } else {
+          level_report.corner_splits = split.splits;
+          say("  level " + std::to_string(level) + " corners: " + std::to_string(split.splits) +
+              " stretched edges split, " + std::to_string(mesh.n_faces()) + " faces; adjusted again");
+          adjusted = AdjustLevelInWindows(&mesh, window_images(level), level_options(level), options.windows,
+                                          level == finest, options.progress);
+        }
+      }
+      WallCornerOptions corner_options;
+      corner_options.edge_length = edge_length(level);
+      const WallCornerSearch search = FindWallCorners(mesh, corner_options);
+      level_report.corners_found = static_cast<int>(search.corners.size());
+      say("  level " + std::to_string(level) + " corners: " + std::to_string(search.regions) + " planar regions (" +
+          std::to_string(search.wall_regions) + " walls), " + std::to_string(search.corners.size()) +
+          " vertical corners");
+      int crossing = search.corners.empty() ? 0 : CountSelfIntersections(mesh);
+      int folded = search.corners.empty() ? 0 : CountFoldedFaces(mesh);
+      for (const WallCorner& corner : search.corners) {
+        TinMesh before = mesh;
+        const CornerLaying laid = LayCornerOntoWalls(&mesh, corner, corner_options);
+        if (laid.moved == 0) continue;
+        UpdateVertexNormals(&mesh);
+        std::ostringstream line;
+        line.precision(3);
+        line << std::fixed << "  level " << level << ": corner at (" << corner.point.x() << ", " << corner.point.y()
+             << ", " << corner.point.z() << "), " << laid.moved << " vertices (" << laid.on_line
+             << " onto the line), max move " << laid.max_move << " m";
+        int crossing_now = CountSelfIntersections(mesh), folded_now = CountFoldedFaces(mesh);
+        if ((crossing_now > crossing || folded_now > folded) && options.fold_lips_untangle_rounds > 0) {
+          crossing_now = UntangleSelfIntersections(&mesh, options.fold_lips_untangle_rounds).pairs_after;
+          UpdateVertexNormals(&mesh);
+          folded_now = CountFoldedFaces(mesh);
+        }
+        if (crossing_now > crossing || folded_now > folded) {
+          line << ": " << crossing_now - crossing << " crossing pairs and " << folded_now - folded
+               << " folded faces, left";
+          say(line.str());
+          mesh = std::move(before);
+          ++level_report.corners_dropped;
+          continue;
+        }
+        Readjusted re = readjust(before, options.wall_corners_local_rings);
+        const bool better = re.done && re.now_sigma0 < re.was_sigma0 * (1.0 + options.wall_corners_tolerance);
+        line << "; sigma0 " << re.now_sigma0 << " against " << re.was_sigma0 << " (" << re.local_windows
+             << " local windows), " << (better ? "kept" : "dropped");
+        say(line.str());
+        if (better) {
+          adjusted = std::move(re.level);
+          ++level_report.corners_laid;
+          level_report.corner_vertices_moved += laid.moved;
+          crossing = CountSelfIntersections(mesh);
+          folded = CountFoldedFaces(mesh);
+        } else {
+          mesh = std::move(before);
+          ++level_report.corners_dropped;
+        }
+      }
+      if (level_report.corners_laid > 0 || level_report.corner_splits > 0) update_products_surface();
+    };
     // Walls the adjustment left beyond its pull-in: search along the normals again and
     // adjust again, kept only when the level then fits better.
     const int rounds_last_level = cycle > 0 && options.v_cycle_rounds_last_level >= 0
@@ -806,6 +893,10 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
         level_report.straightened += straight.moved;
       }
     }
+    // Vertical corners of buildings (issue 7): the finest level's last visit splits what
+    // the walls stretched, then lays each corner's crumpled band onto its two walls and its
+    // line (mesh/wall_corners.h), one corner at a time, kept when the images agree.
+    if (options.wall_corners && last_pass && !closed && !fitted) lay_wall_corners();
     // After the finest level's last adjustment too (a pocket folded under an eave, seen
     // by no image, would stay in the products): same topology, so only the products'
     // surface points move; the grey values there were never observed anyway. Not for

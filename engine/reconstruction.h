@@ -120,6 +120,17 @@ struct ReconstructionOptions {
   // at most this many rounds; 0 = left at once) and left only when pairs remain.
   int fold_lips_untangle_rounds = 4;
   double fold_lips_tolerance = 0.01;
+  // On the finest level's last visit (issue 7; on with --thorough-walls; not for closed
+  // or fitted-plane starts): edges the walls stretched are split (QualityPass, then the
+  // level adjusted again), and each vertical corner where two planar walls meet
+  // (FindWallCorners, mesh/wall_corners.h) gets its band of crumpled vertices laid onto
+  // the two walls and onto the corner line, one corner at a time; a corner is left when it
+  // makes triangles cross or fold (after at most fold_lips_untangle_rounds of
+  // untangling), else the windows within wall_corners_local_rings edge rings run again and
+  // it is kept unless their sigma0 rises by more than wall_corners_tolerance.
+  bool wall_corners = false;
+  int wall_corners_local_rings = 2;
+  double wall_corners_tolerance = 0.01;
   // After each level: triangle pairs that cross (between windows, after splits: the
   // fold guard only sees one window's step) are untangled by local smoothing of their
   // corners and rings (UntangleSelfIntersections, mesh/surface_validity.h).
@@ -298,6 +309,14 @@ struct LevelReport {
   int lips_dropped = 0;
   int lips_untangled = 0;  // of the kept ones, those whose crossing pairs were untangled first
   int lips_flattened = 0;  // of the kept ones, those whose folded rim was flattened first (FlattenFoldedRim)
+  // ReconstructionOptions::wall_corners: splits of stretched edges before them, corners
+  // found, laid and kept, their vertices moved, and those left (crossing or folded
+  // triangles, or a worse fit).
+  int corner_splits = 0;
+  int corners_found = 0;
+  int corners_laid = 0;
+  int corner_vertices_moved = 0;
+  int corners_dropped = 0;
   int crossing_untangled = 0;  // crossing pairs before the untangling (ReconstructionOptions::untangle)
   int untangle_moved = 0;      // vertices it moved
   int untangle_membranes = 0;  // membranes it solved where the smoothing rounds left pairs

@@ -1,0 +1,302 @@
+#include "mesh/wall_corners.h"
+
+#include <Eigen/Geometry>
+#include <Eigen/QR>
+#include <algorithm>
+#include <array>
+#include <utility>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+#include "mesh/local_ops.h"
+#include "mesh/principal_axes.h"
+
+namespace facets {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+constexpr double kSteepMaxNz = 0.5;  // a wall: normal more than 60 degrees from +Z
+
+struct Region {
+  Eigen::Vector3d centre, normal;
+  int faces = 0;
+};
+
+Eigen::Vector3d UnitFaceNormal(const TinMesh& mesh, TinMesh::FaceHandle f) {
+  auto it = mesh.cfv_iter(f);
+  const Eigen::Vector3d p0 = ToEigen(mesh.point(*it));
+  const Eigen::Vector3d p1 = ToEigen(mesh.point(*++it));
+  const Eigen::Vector3d p2 = ToEigen(mesh.point(*++it));
+  const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
+  const double len = n.norm();
+  return len > 0.0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
+}
+
+PrincipalAxes FitFaces(const TinMesh& mesh, const std::vector<int>& faces) {
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(3 * faces.size());
+  for (int f : faces) {
+    for (auto v : mesh.fv_range(mesh.face_handle(f))) points.push_back(ToEigen(mesh.point(v)));
+  }
+  return FitPrincipalAxes(points);
+}
+
+// Planar regions (see the header); the region of each face, -1 for none.
+std::vector<Region> GrowRegions(const TinMesh& mesh, const WallCornerOptions& o, std::vector<int>* face_region) {
+  const int nf = static_cast<int>(mesh.n_faces());
+  const double cos_angle = std::cos(o.region_angle_deg * kDeg);
+  const double tol = o.region_tolerance * o.edge_length;
+  std::vector<Eigen::Vector3d> fn(nf);
+  for (auto f : mesh.faces()) fn[f.idx()] = UnitFaceNormal(mesh, f);
+  // Flattest first: the least cosine between a face and its neighbours.
+  std::vector<double> flatness(nf, 1.0);
+  for (auto f : mesh.faces()) {
+    for (auto g : mesh.ff_range(f)) flatness[f.idx()] = std::min(flatness[f.idx()], fn[f.idx()].dot(fn[g.idx()]));
+  }
+  std::vector<int> order(nf);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return flatness[a] > flatness[b]; });
+
+  face_region->assign(nf, -1);
+  std::vector<Region> regions;
+  std::vector<bool> seeded(nf, false);
+  for (int seed : order) {
+    if ((*face_region)[seed] >= 0 || seeded[seed] || flatness[seed] < cos_angle) continue;
+    if (fn[seed].squaredNorm() == 0.0) continue;
+    seeded[seed] = true;
+    const int id = static_cast<int>(regions.size());
+    Eigen::Vector3d normal = fn[seed];
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (auto v : mesh.fv_range(mesh.face_handle(seed))) centre += ToEigen(mesh.point(v)) / 3.0;
+    std::vector<int> members{seed};
+    (*face_region)[seed] = id;
+    size_t next_refit = 4;
+    for (size_t i = 0; i < members.size(); ++i) {
+      const auto f = mesh.face_handle(members[i]);
+      for (auto g : mesh.ff_range(f)) {
+        const int gi = g.idx();
+        if ((*face_region)[gi] >= 0) continue;
+        if (fn[gi].dot(fn[f.idx()]) < cos_angle || fn[gi].dot(normal) < cos_angle) continue;
+        bool near = true;
+        for (auto v : mesh.fv_range(g)) near = near && std::abs((ToEigen(mesh.point(v)) - centre).dot(normal)) <= tol;
+        if (!near) continue;
+        (*face_region)[gi] = id;
+        members.push_back(gi);
+      }
+      if (members.size() >= next_refit) {
+        const PrincipalAxes fit = FitFaces(mesh, members);
+        centre = fit.centre;
+        normal = fit.Normal().dot(normal) < 0.0 ? Eigen::Vector3d(-fit.Normal()) : fit.Normal();
+        next_refit *= 2;
+      }
+    }
+    bool keep = static_cast<int>(members.size()) >= o.min_region_faces;
+    if (keep) {
+      const PrincipalAxes fit = FitFaces(mesh, members);
+      centre = fit.centre;
+      normal = fit.Normal().dot(normal) < 0.0 ? Eigen::Vector3d(-fit.Normal()) : fit.Normal();
+      keep = std::sqrt(std::max(0.0, fit.eigenvalues(0)) / (3.0 * members.size())) <= tol;
+    }
+    if (!keep) {
+      for (int m : members) (*face_region)[m] = -1;
+      continue;
+    }
+    regions.push_back({centre, normal, static_cast<int>(members.size())});
+  }
+  return regions;
+}
+
+}  // namespace
+
+void WallCornerOptions::Check() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("WallCornerOptions: " + what); };
+  if (!(edge_length > 0.0)) fail("edge_length must be > 0");
+  if (!(region_angle_deg > 0.0 && region_angle_deg < 90.0)) fail("region_angle_deg must lie in (0, 90)");
+  if (!(region_tolerance > 0.0)) fail("region_tolerance must be > 0");
+  if (min_region_faces < 1) fail("min_region_faces must be >= 1");
+  if (!(band > 0.0)) fail("band must be > 0");
+  if (!(snap >= 0.0 && snap <= band)) fail("snap must lie in [0, band]");
+}
+
+WallCornerSearch FindWallCorners(const TinMesh& mesh, const WallCornerOptions& options) {
+  options.Check();
+  WallCornerSearch search;
+  std::vector<int> face_region;
+  const std::vector<Region> regions = GrowRegions(mesh, options, &face_region);
+  search.regions = static_cast<int>(regions.size());
+  const double h = options.edge_length;
+  const int nv = static_cast<int>(mesh.n_vertices());
+  // Per vertex: its wall regions, and whether it lies on a roof or ground region.
+  std::vector<std::vector<int>> vertex_walls(nv);
+  std::vector<bool> on_flat(nv, false);
+  std::vector<int> walls;
+  for (int r = 0; r < search.regions; ++r) {
+    if (std::abs(regions[r].normal.z()) < kSteepMaxNz) walls.push_back(r);
+  }
+  search.wall_regions = static_cast<int>(walls.size());
+  for (auto f : mesh.faces()) {
+    const int r = face_region[f.idx()];
+    if (r < 0) continue;
+    const bool steep = std::abs(regions[r].normal.z()) < kSteepMaxNz;
+    for (auto v : mesh.fv_range(f)) {
+      if (!steep) {
+        on_flat[v.idx()] = true;
+      } else if (std::find(vertex_walls[v.idx()].begin(), vertex_walls[v.idx()].end(), r) ==
+                 vertex_walls[v.idx()].end()) {
+        vertex_walls[v.idx()].push_back(r);
+      }
+    }
+  }
+  std::vector<std::vector<int>> wall_vertices(search.regions);
+  for (int v = 0; v < nv; ++v) {
+    for (int r : vertex_walls[v]) wall_vertices[r].push_back(v);
+  }
+  auto point = [&](int v) { return ToEigen(mesh.point(mesh.vertex_handle(v))); };
+  const double cos_min = std::cos(135.0 * kDeg), cos_max = std::cos(45.0 * kDeg);
+  for (size_t i = 0; i < walls.size(); ++i) {
+    for (size_t j = i + 1; j < walls.size(); ++j) {
+      const Region& a = regions[walls[i]];
+      const Region& b = regions[walls[j]];
+      const double cos_ab = a.normal.dot(b.normal);
+      if (cos_ab > cos_max || cos_ab < cos_min) continue;
+      const Eigen::Vector3d dir = a.normal.cross(b.normal).normalized();
+      Eigen::Matrix3d m;
+      m.row(0) = a.normal.transpose();
+      m.row(1) = b.normal.transpose();
+      m.row(2) = dir.transpose();
+      const Eigen::Vector3d q = m.colPivHouseholderQr().solve(
+          Eigen::Vector3d(a.normal.dot(a.centre), b.normal.dot(b.centre), dir.dot(0.5 * (a.centre + b.centre))));
+      auto off_line = [&](const Eigen::Vector3d& p) {
+        const Eigen::Vector3d d = p - q;
+        return (d - d.dot(dir) * dir).norm();
+      };
+      // Each wall's stretch along the line (its vertices within 2 edges of it) and how
+      // close it comes.
+      double lo[2], hi[2], nearest[2];
+      const int ids[2] = {walls[i], walls[j]};
+      for (int k = 0; k < 2; ++k) {
+        lo[k] = std::numeric_limits<double>::infinity();
+        hi[k] = -lo[k];
+        nearest[k] = lo[k];
+        for (int v : wall_vertices[ids[k]]) {
+          const Eigen::Vector3d p = point(v);
+          const double d = off_line(p);
+          nearest[k] = std::min(nearest[k], d);
+          if (d > 2.0 * h) continue;
+          const double t = (p - q).dot(dir);
+          lo[k] = std::min(lo[k], t);
+          hi[k] = std::max(hi[k], t);
+        }
+      }
+      if (nearest[0] > 1.6 * h || nearest[1] > 1.6 * h) continue;
+      const double t0 = std::max(lo[0], lo[1]) + 0.5 * h, t1 = std::min(hi[0], hi[1]) - 0.5 * h;
+      if (t1 - t0 < 2.0 * h) continue;
+      WallCorner corner;
+      corner.point = q + 0.5 * (t0 + t1) * dir;
+      corner.direction = dir;
+      corner.half_length = 0.5 * (t1 - t0);
+      corner.normal[0] = a.normal;
+      corner.normal[1] = b.normal;
+      corner.centre[0] = a.centre;
+      corner.centre[1] = b.centre;
+      corner.faces[0] = a.faces;
+      corner.faces[1] = b.faces;
+      corner.convex = (b.centre - a.centre).dot(a.normal) < 0.0;
+      for (auto vh : mesh.vertices()) {
+        if (mesh.is_boundary(vh) || on_flat[vh.idx()]) continue;
+        const Eigen::Vector3d p = ToEigen(mesh.point(vh));
+        const double t = (p - corner.point).dot(dir);
+        if (std::abs(t) > corner.half_length || off_line(p) > options.band * h) continue;
+        corner.band.push_back(vh.idx());
+      }
+      if (!corner.band.empty()) search.corners.push_back(std::move(corner));
+    }
+  }
+  return search;
+}
+
+CornerLaying LayCornerOntoWalls(TinMesh* mesh, const WallCorner& corner, const WallCornerOptions& options) {
+  options.Check();
+  CornerLaying laying;
+  const Eigen::Vector3d& dir = corner.direction;
+  auto onto_line = [&](const Eigen::Vector3d& p) -> Eigen::Vector3d {
+    return corner.point + (p - corner.point).dot(dir) * dir;
+  };
+  const double snap = options.snap * options.edge_length;
+  std::vector<std::pair<int, Eigen::Vector3d>> moved;  // vertex, where it was
+  for (int v : corner.band) {
+    const auto vh = mesh->vertex_handle(v);
+    const Eigen::Vector3d p = ToEigen(mesh->point(vh));
+    const double s[2] = {(p - corner.centre[0]).dot(corner.normal[0]), (p - corner.centre[1]).dot(corner.normal[1])};
+    // A convex corner's solid is inside both planes: the surface point nearest is on the
+    // plane with the larger signed distance; a re-entrant corner's is inside either.
+    const int k = corner.convex == (s[0] >= s[1]) ? 0 : 1;
+    Eigen::Vector3d target = p - s[k] * corner.normal[k];
+    const double other = (target - corner.centre[1 - k]).dot(corner.normal[1 - k]);
+    const bool beyond = corner.convex ? other > 0.0 : other < 0.0;
+    const Eigen::Vector3d on_line = onto_line(target);
+    if (beyond || (target - on_line).norm() < snap) target = on_line;
+    if ((target - p).norm() < 1e-6 * options.edge_length) continue;  // on its wall already
+    mesh->set_point(vh, ToOpenMesh(target));
+    moved.emplace_back(v, p);
+  }
+  // Two band vertices can swap sides, or three end on the line: a face around them that
+  // turned its back on the walls (against their mean normal or its neighbours), or lost
+  // its area, gets the corner that moved most back where it was, until none is left.
+  const Eigen::Vector3d outward = corner.normal[0] + corner.normal[1];
+  std::vector<char> restored(moved.size(), 0);
+  auto bad = [&](TinMesh::FaceHandle f) {
+    std::array<Eigen::Vector3d, 3> p;
+    int i = 0;
+    for (auto v : mesh->fv_range(f)) p[i++] = ToEigen(mesh->point(v));
+    const Eigen::Vector3d n = (p[1] - p[0]).cross(p[2] - p[0]);
+    const double longest = std::max({(p[1] - p[0]).norm(), (p[2] - p[1]).norm(), (p[0] - p[2]).norm()});
+    if (NoArea(n.norm(), longest, 0.05)) return true;
+    if (n.dot(outward) < 0.0) return true;
+    Eigen::Vector3d around = Eigen::Vector3d::Zero();
+    for (auto g : mesh->ff_range(f)) around += UnitFaceNormal(*mesh, g);
+    return n.dot(around) < 0.0;
+  };
+  for (size_t round = 0; round < moved.size(); ++round) {
+    std::vector<char> restore(moved.size(), 0);
+    bool any = false;
+    for (size_t k = 0; k < moved.size(); ++k) {
+      if (restored[k]) continue;
+      for (auto f : mesh->vf_range(mesh->vertex_handle(moved[k].first))) {
+        if (!bad(f)) continue;
+        // The corner of this face that moved most (among those still moved).
+        size_t worst = k;
+        double most = -1.0;
+        for (auto v : mesh->fv_range(f)) {
+          for (size_t m = 0; m < moved.size(); ++m) {
+            if (moved[m].first != v.idx() || restored[m]) continue;
+            const double d = (ToEigen(mesh->point(v)) - moved[m].second).norm();
+            if (d > most) most = d, worst = m;
+          }
+        }
+        restore[worst] = 1;
+        any = true;
+      }
+    }
+    if (!any) break;
+    for (size_t k = 0; k < moved.size(); ++k) {
+      if (!restore[k]) continue;
+      mesh->set_point(mesh->vertex_handle(moved[k].first), ToOpenMesh(moved[k].second));
+      restored[k] = 1;
+      ++laying.left_off;
+    }
+  }
+  for (size_t k = 0; k < moved.size(); ++k) {
+    if (restored[k]) continue;
+    ++laying.moved;
+    const Eigen::Vector3d p = ToEigen(mesh->point(mesh->vertex_handle(moved[k].first)));
+    laying.max_move = std::max(laying.max_move, (p - moved[k].second).norm());
+    if ((p - onto_line(p)).norm() < 1e-9) ++laying.on_line;
+  }
+  return laying;
+}
+
+}  // namespace facets
