@@ -10,6 +10,7 @@
 #include <numeric>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 
 #include "mesh/local_ops.h"
 #include "mesh/principal_axes.h"
@@ -22,7 +23,6 @@ constexpr double kSteepMaxNz = 0.5;  // a wall: normal more than 60 degrees from
 
 struct Region {
   Eigen::Vector3d centre, normal;
-  int faces = 0;
 };
 
 Eigen::Vector3d UnitFaceNormal(const TinMesh& mesh, TinMesh::FaceHandle f) {
@@ -104,7 +104,7 @@ std::vector<Region> GrowRegions(const TinMesh& mesh, const WallCornerOptions& o,
       for (int m : members) (*face_region)[m] = -1;
       continue;
     }
-    regions.push_back({centre, normal, static_cast<int>(members.size())});
+    regions.push_back({centre, normal});
   }
   return regions;
 }
@@ -202,8 +202,6 @@ WallCornerSearch FindWallCorners(const TinMesh& mesh, const WallCornerOptions& o
       corner.normal[1] = b.normal;
       corner.centre[0] = a.centre;
       corner.centre[1] = b.centre;
-      corner.faces[0] = a.faces;
-      corner.faces[1] = b.faces;
       corner.convex = (b.centre - a.centre).dot(a.normal) < 0.0;
       for (auto vh : mesh.vertices()) {
         if (mesh.is_boundary(vh) || on_flat[vh.idx()]) continue;
@@ -248,6 +246,8 @@ CornerLaying LayCornerOntoWalls(TinMesh* mesh, const WallCorner& corner, const W
   // its area, gets the corner that moved most back where it was, until none is left.
   const Eigen::Vector3d outward = corner.normal[0] + corner.normal[1];
   std::vector<char> restored(moved.size(), 0);
+  std::unordered_map<int, size_t> slot;  // vertex -> its entry in moved
+  for (size_t k = 0; k < moved.size(); ++k) slot[moved[k].first] = k;
   auto bad = [&](TinMesh::FaceHandle f) {
     std::array<Eigen::Vector3d, 3> p;
     int i = 0;
@@ -271,11 +271,10 @@ CornerLaying LayCornerOntoWalls(TinMesh* mesh, const WallCorner& corner, const W
         size_t worst = k;
         double most = -1.0;
         for (auto v : mesh->fv_range(f)) {
-          for (size_t m = 0; m < moved.size(); ++m) {
-            if (moved[m].first != v.idx() || restored[m]) continue;
-            const double d = (ToEigen(mesh->point(v)) - moved[m].second).norm();
-            if (d > most) most = d, worst = m;
-          }
+          const auto it = slot.find(v.idx());
+          if (it == slot.end() || restored[it->second]) continue;
+          const double d = (ToEigen(mesh->point(v)) - moved[it->second].second).norm();
+          if (d > most) most = d, worst = it->second;
         }
         restore[worst] = 1;
         any = true;

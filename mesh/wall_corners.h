@@ -55,7 +55,6 @@ struct WallCorner {
   Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();  // unit, along the line
   double half_length = 0.0;                              // of the stretch along it
   Eigen::Vector3d normal[2], centre[2];                  // the two walls' planes (normals outward)
-  int faces[2] = {0, 0};                                 // faces of the two regions
   bool convex = true;
   std::vector<int> band;  // vertex indices
 };
