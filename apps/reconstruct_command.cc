@@ -128,6 +128,9 @@ struct ReconstructArgs {
   bool no_relax_unseen = false;
   bool no_fold_lips = false;
   bool wall_corners = false;  // set by --wall-corners or the --thorough-walls bundle
+  bool wall_feet = false;     // ... --wall-feet
+  bool wall_eaves = false;    // ... --wall-eaves
+  double wall_corner_min_angle = ReconstructionOptions().wall_corner_min_angle_deg;
   bool no_wall_corners = false;
   bool no_untangle = false;
   bool keep_crossing_facets = false;
@@ -157,7 +160,9 @@ void RunReconstruct(const ReconstructArgs& args) {
     bundle << "settings: --thorough-walls: " << args.v_cycles << " v-cycle(s), normal-search rounds in them down to level "
            << args.v_cycle_rounds_last_level << ", tolerance " << args.normal_search_tolerance << ", local rings "
            << args.normal_search_local_rings << ", grey facets of " << args.facet_pixels << " pixels"
-           << (args.wall_corners && !args.no_wall_corners ? ", vertical corners laid onto their walls" : "");
+           << (args.wall_corners && !args.no_wall_corners ? ", vertical corners laid onto their walls" : "")
+           << (args.wall_feet && !args.no_wall_corners ? ", walls' feet laid" : "")
+           << (args.wall_eaves && !args.no_wall_corners ? ", eaves laid" : "");
     say(bundle.str());
   }
   ImageBlock block;
@@ -285,6 +290,9 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.relax_unseen = !args.no_relax_unseen;
   options.fold_lips = !args.no_fold_lips;
   options.wall_corners = args.wall_corners && !args.no_wall_corners;
+  options.wall_feet = args.wall_feet && !args.no_wall_corners;
+  options.wall_eaves = args.wall_eaves && !args.no_wall_corners;
+  options.wall_corner_min_angle_deg = args.wall_corner_min_angle;
   options.untangle = !args.no_untangle;
   options.flatten_crossing_facets = !args.keep_crossing_facets;
   options.adjustment.sector_regularisation = args.sector_regularisation;
@@ -666,12 +674,25 @@ void AddReconstructCommand(CLI::App& app) {
       "--wall-corners", args->wall_corners,
       "finest level: split the edges walls stretched, then lay each vertical corner's band onto its two walls and "
       "their line, kept when the images agree (on with --thorough-walls)");
-  sub->add_flag("--no-wall-corners", args->no_wall_corners, "no corner laying, also with --thorough-walls")
-      ->excludes(corners_on);
+  auto* feet_on = sub->add_flag("--wall-feet", args->wall_feet,
+                                "finest level: lay the crease where a wall meets the ground (or a lower roof) "
+                                "onto both, like --wall-corners (on with --thorough-walls)");
+  auto* eaves_on = sub->add_flag("--wall-eaves", args->wall_eaves,
+                                 "finest level: lay the crease where a wall meets its roof onto both, like "
+                                 "--wall-corners (on with --thorough-walls)");
+  sub->add_option("--wall-corner-min-angle", args->wall_corner_min_angle,
+                  "least angle in degrees between two walls' normals for a vertical corner (45..90)")
+      ->capture_default_str();
+  sub->add_flag("--no-wall-corners", args->no_wall_corners,
+                "no corner, foot or eave laying, also with --thorough-walls")
+      ->excludes(corners_on)
+      ->excludes(feet_on)
+      ->excludes(eaves_on);
   sub->add_flag("--thorough-walls", args->thorough_walls,
                 "walls (issue 7): 1.5-pixel facets and one V-cycle with normal-search rounds down to level 0, "
                 "re-adjusted locally (--facet-pixels 1.5 --v-cycles 1 --v-cycle-rounds-last-level 0 "
-                "--normal-search-tolerance 1 --normal-search-local-rings 1 --wall-corners, each unless given); about 7x the time");
+                "--normal-search-tolerance 1 --normal-search-local-rings 1 --wall-corners --wall-feet --wall-eaves, each "
+                "unless given); about 7x the time");
   sub->callback([args, sub] {
     try {
       std::map<std::string, std::string> bundled;  // option -> value the bundle set
@@ -687,7 +708,11 @@ void AddReconstructCommand(CLI::App& app) {
         bundle("normal-search-tolerance", "1", &args->normal_search_tolerance, 1.0);
         bundle("normal-search-local-rings", "1", &args->normal_search_local_rings, 1);
         bundle("facet-pixels", "1.5", &args->facet_pixels, 1.5);
-        if (!args->no_wall_corners) bundle("wall-corners", "true", &args->wall_corners, true);
+        if (!args->no_wall_corners) {
+          bundle("wall-corners", "true", &args->wall_corners, true);
+          bundle("wall-feet", "true", &args->wall_feet, true);
+          bundle("wall-eaves", "true", &args->wall_eaves, true);
+        }
       }
       args->settings = SettingsFile(*sub, bundled);
       RunReconstruct(*args);

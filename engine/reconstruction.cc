@@ -184,6 +184,8 @@ void ReconstructionOptions::Check() const {
   if (v_cycle_rounds_last_level < -1) fail("v_cycle_rounds_last_level must be >= -1");
   if (wall_corners_local_rings < -1) fail("wall_corners_local_rings must be >= -1");
   if (!(wall_corners_tolerance >= 0.0 && wall_corners_tolerance <= 1.0)) fail("wall_corners_tolerance must lie in 0..1");
+  if (!(wall_corner_min_angle_deg >= 45.0 && wall_corner_min_angle_deg < 90.0))
+    fail("wall_corner_min_angle_deg must lie in [45, 90)");
   if (v_cycles > 0 && v_cycle_level < 1) fail("v_cycle_level must be >= 1 (a level above the finest)");
   if (!(v_cycle_robust_k >= 0.0)) fail("v_cycle_robust_k must be >= 0");
   if (v_cycle_robust_k > 0.0 && !(v_cycle_reject_k > v_cycle_robust_k)) fail("v_cycle_reject_k must exceed v_cycle_robust_k");
@@ -282,6 +284,10 @@ std::string ReconstructionReport::Json() const {
     l["corner_splits"] = level.corner_splits;
     l["corners_found"] = level.corners_found;
     l["corners_laid"] = level.corners_laid;
+    l["feet_found"] = level.feet_found;
+    l["feet_laid"] = level.feet_laid;
+    l["eaves_found"] = level.eaves_found;
+    l["eaves_laid"] = level.eaves_laid;
     l["corner_vertices_moved"] = level.corner_vertices_moved;
     l["corners_dropped"] = level.corners_dropped;
     l["lips_untangled"] = level.lips_untangled;
@@ -756,11 +762,23 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       }
       WallCornerOptions corner_options;
       corner_options.edge_length = edge_length(level);
-      const WallCornerSearch search = FindWallCorners(mesh, corner_options);
-      level_report.corners_found = static_cast<int>(search.corners.size());
+      corner_options.vertical = options.wall_corners;
+      corner_options.feet = options.wall_feet;
+      corner_options.eaves = options.wall_eaves;
+      corner_options.min_corner_angle_deg = options.wall_corner_min_angle_deg;
+      WallCornerSearch search = FindWallCorners(mesh, corner_options);
+      // Vertical corners first (their bands end half an edge above the foot and below
+      // the eave), then feet and eaves.
+      std::stable_sort(search.corners.begin(), search.corners.end(),
+                       [](const WallCorner& a, const WallCorner& b) { return a.kind < b.kind; });
+      level_report.corners_found = search.count(CreaseKind::kVertical);
+      level_report.feet_found = search.count(CreaseKind::kFoot);
+      level_report.eaves_found = search.count(CreaseKind::kEave);
       say("  level " + std::to_string(level) + " corners: " + std::to_string(search.regions) + " planar regions (" +
-          std::to_string(search.wall_regions) + " walls), " + std::to_string(search.corners.size()) +
-          " vertical corners");
+          std::to_string(search.wall_regions) + " walls), " + std::to_string(level_report.corners_found) +
+          " vertical corners" +
+          (options.wall_feet ? ", " + std::to_string(level_report.feet_found) + " feet" : std::string()) +
+          (options.wall_eaves ? ", " + std::to_string(level_report.eaves_found) + " eaves" : std::string()));
       int crossing = search.corners.empty() ? 0 : CountSelfIntersections(mesh);
       int folded = search.corners.empty() ? 0 : CountFoldedFaces(mesh);
       for (const WallCorner& corner : search.corners) {
@@ -770,8 +788,8 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
         UpdateVertexNormals(&mesh);
         std::ostringstream line;
         line.precision(3);
-        line << std::fixed << "  level " << level << ": corner at (" << corner.point.x() << ", " << corner.point.y()
-             << ", " << corner.point.z() << "), " << laid.moved << " vertices (" << laid.on_line
+        line << std::fixed << "  level " << level << ": " << CreaseName(corner.kind) << " at (" << corner.point.x()
+             << ", " << corner.point.y() << ", " << corner.point.z() << "), " << laid.moved << " vertices (" << laid.on_line
              << " onto the line), max move " << laid.max_move << " m";
         int crossing_now = CountSelfIntersections(mesh), folded_now = CountFoldedFaces(mesh);
         if ((crossing_now > crossing || folded_now > folded) && options.fold_lips_untangle_rounds > 0) {
@@ -794,7 +812,9 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
         say(line.str());
         if (better) {
           adjusted = std::move(re.level);
-          ++level_report.corners_laid;
+          ++(corner.kind == CreaseKind::kFoot   ? level_report.feet_laid
+             : corner.kind == CreaseKind::kEave ? level_report.eaves_laid
+                                                : level_report.corners_laid);
           level_report.corner_vertices_moved += laid.moved;
           crossing = CountSelfIntersections(mesh);
           folded = CountFoldedFaces(mesh);
@@ -803,7 +823,9 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
           ++level_report.corners_dropped;
         }
       }
-      if (level_report.corners_laid > 0 || level_report.corner_splits > 0) update_products_surface();
+      if (level_report.corners_laid + level_report.feet_laid + level_report.eaves_laid > 0 ||
+          level_report.corner_splits > 0)
+        update_products_surface();
     };
     // Walls the adjustment left beyond its pull-in: search along the normals again and
     // adjust again, kept only when the level then fits better.
@@ -895,8 +917,10 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     }
     // Vertical corners of buildings (issue 7): the finest level's last visit splits what
     // the walls stretched, then lays each corner's crumpled band onto its two walls and its
-    // line (mesh/wall_corners.h), one corner at a time, kept when the images agree.
-    if (options.wall_corners && last_pass && !closed && !fitted) lay_wall_corners();
+    // line (mesh/wall_corners.h), one corner at a time, kept when the images agree; the
+    // same for walls' feet and eaves when asked.
+    if ((options.wall_corners || options.wall_feet || options.wall_eaves) && last_pass && !closed && !fitted)
+      lay_wall_corners();
     // After the finest level's last adjustment too (a pocket folded under an eave, seen
     // by no image, would stay in the products): same topology, so only the products'
     // surface points move; the grey values there were never observed anyway. Not for

@@ -119,69 +119,118 @@ void WallCornerOptions::Check() const {
   if (min_region_faces < 1) fail("min_region_faces must be >= 1");
   if (!(band > 0.0)) fail("band must be > 0");
   if (!(snap >= 0.0 && snap <= band)) fail("snap must lie in [0, band]");
+  if (!(local_fit > 0.0)) fail("local_fit must be > 0");
+  if (!(min_corner_angle_deg >= 45.0 && min_corner_angle_deg < 90.0)) fail("min_corner_angle_deg must lie in [45, 90)");
+}
+
+const char* CreaseName(CreaseKind kind) {
+  switch (kind) {
+    case CreaseKind::kFoot: return "foot";
+    case CreaseKind::kEave: return "eave";
+    default: return "corner";
+  }
+}
+
+int WallCornerSearch::count(CreaseKind kind) const {
+  return static_cast<int>(std::count_if(corners.begin(), corners.end(),
+                                        [kind](const WallCorner& c) { return c.kind == kind; }));
 }
 
 WallCornerSearch FindWallCorners(const TinMesh& mesh, const WallCornerOptions& options) {
   options.Check();
   WallCornerSearch search;
   std::vector<int> face_region;
-  const std::vector<Region> regions = GrowRegions(mesh, options, &face_region);
+  std::vector<Region> regions = GrowRegions(mesh, options, &face_region);
   search.regions = static_cast<int>(regions.size());
   const double h = options.edge_length;
   const int nv = static_cast<int>(mesh.n_vertices());
-  // Per vertex: its wall regions, and whether it lies on a roof or ground region.
-  std::vector<std::vector<int>> vertex_walls(nv);
-  std::vector<bool> on_flat(nv, false);
-  std::vector<int> walls;
+  std::vector<bool> steep(search.regions);
   for (int r = 0; r < search.regions; ++r) {
-    if (std::abs(regions[r].normal.z()) < kSteepMaxNz) walls.push_back(r);
+    steep[r] = std::abs(regions[r].normal.z()) < kSteepMaxNz;
+    search.wall_regions += steep[r] ? 1 : 0;
   }
-  search.wall_regions = static_cast<int>(walls.size());
+  // Per vertex: the regions of its faces, and whether one of them is a roof or ground.
+  std::vector<std::vector<int>> vertex_regions(nv);
+  std::vector<bool> on_flat(nv, false);
   for (auto f : mesh.faces()) {
     const int r = face_region[f.idx()];
     if (r < 0) continue;
-    const bool steep = std::abs(regions[r].normal.z()) < kSteepMaxNz;
     for (auto v : mesh.fv_range(f)) {
-      if (!steep) {
-        on_flat[v.idx()] = true;
-      } else if (std::find(vertex_walls[v.idx()].begin(), vertex_walls[v.idx()].end(), r) ==
-                 vertex_walls[v.idx()].end()) {
-        vertex_walls[v.idx()].push_back(r);
-      }
+      if (!steep[r]) on_flat[v.idx()] = true;
+      std::vector<int>& list = vertex_regions[v.idx()];
+      if (std::find(list.begin(), list.end(), r) == list.end()) list.push_back(r);
     }
   }
-  std::vector<std::vector<int>> wall_vertices(search.regions);
+  std::vector<std::vector<int>> region_vertices(search.regions);
   for (int v = 0; v < nv; ++v) {
-    for (int r : vertex_walls[v]) wall_vertices[r].push_back(v);
+    for (int r : vertex_regions[v]) region_vertices[r].push_back(v);
   }
   auto point = [&](int v) { return ToEigen(mesh.point(mesh.vertex_handle(v))); };
   const double cos_min = std::cos(135.0 * kDeg), cos_max = std::cos(45.0 * kDeg);
-  for (size_t i = 0; i < walls.size(); ++i) {
-    for (size_t j = i + 1; j < walls.size(); ++j) {
-      const Region& a = regions[walls[i]];
-      const Region& b = regions[walls[j]];
-      const double cos_ab = a.normal.dot(b.normal);
-      if (cos_ab > cos_max || cos_ab < cos_min) continue;
-      const Eigen::Vector3d dir = a.normal.cross(b.normal).normalized();
-      Eigen::Matrix3d m;
-      m.row(0) = a.normal.transpose();
-      m.row(1) = b.normal.transpose();
-      m.row(2) = dir.transpose();
-      const Eigen::Vector3d q = m.colPivHouseholderQr().solve(
-          Eigen::Vector3d(a.normal.dot(a.centre), b.normal.dot(b.centre), dir.dot(0.5 * (a.centre + b.centre))));
+  const double cos_vertical_min = std::cos((180.0 - options.min_corner_angle_deg) * kDeg);
+  const double cos_vertical_max = std::cos(options.min_corner_angle_deg * kDeg);
+  // The line where two planes meet: a point on it nearest `near`, and its direction.
+  auto meet = [](const Region& a, const Region& b, const Eigen::Vector3d& near, Eigen::Vector3d* q,
+                 Eigen::Vector3d* dir) {
+    *dir = a.normal.cross(b.normal).normalized();
+    Eigen::Matrix3d m;
+    m.row(0) = a.normal.transpose();
+    m.row(1) = b.normal.transpose();
+    m.row(2) = dir->transpose();
+    *q = m.colPivHouseholderQr().solve(Eigen::Vector3d(a.normal.dot(a.centre), b.normal.dot(b.centre), dir->dot(near)));
+  };
+  for (int i = 0; i < search.regions; ++i) {
+    for (int j = i + 1; j < search.regions; ++j) {
+      if (!steep[i] && !steep[j]) continue;
+      const bool vertical = steep[i] && steep[j];
+      if (vertical ? !options.vertical : !(options.feet || options.eaves)) continue;
+      // A wall first: its normal gives the corner's orientation.
+      const int ids[2] = {steep[i] ? i : j, steep[i] ? j : i};
+      Region plane[2] = {regions[ids[0]], regions[ids[1]]};
+      const double cos_ab = plane[0].normal.dot(plane[1].normal);
+      if (cos_ab > (vertical ? cos_vertical_max : cos_max) || cos_ab < (vertical ? cos_vertical_min : cos_min))
+        continue;
+      Eigen::Vector3d q, dir;
+      meet(plane[0], plane[1], 0.5 * (plane[0].centre + plane[1].centre), &q, &dir);
       auto off_line = [&](const Eigen::Vector3d& p) {
         const Eigen::Vector3d d = p - q;
         return (d - d.dot(dir) * dir).norm();
       };
-      // Each wall's stretch along the line (its vertices within 2 edges of it) and how
-      // close it comes.
+      if (!vertical) {
+        // Feet and eaves: each plane refitted to its region's vertices near the line.
+        bool fitted = true;
+        for (int k = 0; k < 2 && fitted; ++k) {
+          std::vector<Eigen::Vector3d> near;
+          for (int v : region_vertices[ids[k]]) {
+            if (off_line(point(v)) <= options.local_fit * h) near.push_back(point(v));
+          }
+          if (static_cast<int>(near.size()) < options.min_region_faces) {
+            fitted = false;
+            break;
+          }
+          const PrincipalAxes fit = FitPrincipalAxes(near);
+          const Eigen::Vector3d n =
+              fit.Normal().dot(plane[k].normal) < 0.0 ? Eigen::Vector3d(-fit.Normal()) : fit.Normal();
+          if (steep[ids[k]] != (std::abs(n.z()) < kSteepMaxNz)) fitted = false;
+          plane[k] = {fit.centre, n};
+        }
+        if (!fitted) continue;
+        const double c = plane[0].normal.dot(plane[1].normal);
+        if (c > cos_max || c < cos_min) continue;
+        meet(plane[0], plane[1], q, &q, &dir);
+      }
+      // Each region's stretch along the line (its vertices within 2 edges of it), how
+      // close it comes, and the mean of those vertices (which side of the other plane
+      // the region lies on).
       double lo[2], hi[2], nearest[2];
-      const int ids[2] = {walls[i], walls[j]};
+      Eigen::Vector3d beside[2];
       for (int k = 0; k < 2; ++k) {
         lo[k] = std::numeric_limits<double>::infinity();
         hi[k] = -lo[k];
         nearest[k] = lo[k];
-        for (int v : wall_vertices[ids[k]]) {
+        beside[k].setZero();
+        int count = 0;
+        for (int v : region_vertices[ids[k]]) {
           const Eigen::Vector3d p = point(v);
           const double d = off_line(p);
           nearest[k] = std::min(nearest[k], d);
@@ -189,7 +238,10 @@ WallCornerSearch FindWallCorners(const TinMesh& mesh, const WallCornerOptions& o
           const double t = (p - q).dot(dir);
           lo[k] = std::min(lo[k], t);
           hi[k] = std::max(hi[k], t);
+          beside[k] += p;
+          ++count;
         }
+        if (count > 0) beside[k] /= count;
       }
       if (nearest[0] > 1.6 * h || nearest[1] > 1.6 * h) continue;
       const double t0 = std::max(lo[0], lo[1]) + 0.5 * h, t1 = std::min(hi[0], hi[1]) - 0.5 * h;
@@ -198,13 +250,20 @@ WallCornerSearch FindWallCorners(const TinMesh& mesh, const WallCornerOptions& o
       corner.point = q + 0.5 * (t0 + t1) * dir;
       corner.direction = dir;
       corner.half_length = 0.5 * (t1 - t0);
-      corner.normal[0] = a.normal;
-      corner.normal[1] = b.normal;
-      corner.centre[0] = a.centre;
-      corner.centre[1] = b.centre;
-      corner.convex = (b.centre - a.centre).dot(a.normal) < 0.0;
+      for (int k = 0; k < 2; ++k) {
+        corner.normal[k] = plane[k].normal;
+        corner.centre[k] = plane[k].centre;
+      }
+      corner.convex = (beside[1] - beside[0]).dot(plane[0].normal) < 0.0;
+      corner.kind = vertical ? CreaseKind::kVertical : corner.convex ? CreaseKind::kEave : CreaseKind::kFoot;
+      if (corner.kind == CreaseKind::kFoot && !options.feet) continue;
+      if (corner.kind == CreaseKind::kEave && !options.eaves) continue;
       for (auto vh : mesh.vertices()) {
-        if (mesh.is_boundary(vh) || on_flat[vh.idx()]) continue;
+        if (mesh.is_boundary(vh)) continue;
+        if (vertical && on_flat[vh.idx()]) continue;
+        if (!vertical && std::any_of(vertex_regions[vh.idx()].begin(), vertex_regions[vh.idx()].end(),
+                                     [&](int r) { return r != ids[0] && r != ids[1]; }))
+          continue;
         const Eigen::Vector3d p = ToEigen(mesh.point(vh));
         const double t = (p - corner.point).dot(dir);
         if (std::abs(t) > corner.half_length || off_line(p) > options.band * h) continue;

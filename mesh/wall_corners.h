@@ -21,6 +21,13 @@
 // line there, not on the border and not on a roof or ground region (a face of theirs
 // in a region less steep).
 //
+// Optionally (feet, eaves) the same for a wall and a gentle region (normal within 60
+// degrees of +Z) meeting it: a re-entrant crease is a foot (the ground, or a lower roof,
+// at the bottom of a wall), a convex one an eave. Their planes are refitted to the
+// region's vertices within local_fit edges of the line (the ground around a building is
+// one wavy region; its global plane is not the one at the wall), and their band leaves
+// out vertices on any third region.
+//
 // LayCornerOntoWalls moves each band vertex onto the wall it is nearer to (a convex
 // corner: the plane it is least inside of; a re-entrant one: the plane it is least
 // outside of), and onto the corner line when it would then still stand outside the
@@ -40,6 +47,9 @@
 
 namespace facets {
 
+enum class CreaseKind { kVertical, kFoot, kEave };
+const char* CreaseName(CreaseKind kind);  // "corner", "foot", "eave"
+
 struct WallCornerOptions {
   double edge_length = 1.0;        // the level's target edge length (h)
   double region_angle_deg = 12.0;  // face to face and face to region normal
@@ -47,6 +57,14 @@ struct WallCornerOptions {
   int min_region_faces = 6;
   double band = 1.5;  // vertices within this many h of the corner line are laid onto the walls
   double snap = 0.6;  // ... and onto the line itself within this many h of it
+  bool vertical = true;    // two walls
+  // Least angle between two walls' normals for a vertical corner (feet and eaves: 45).
+  // A one-face chamfer cut across a right-angled corner encloses about 45 degrees with
+  // each wall and made a false corner on block_oblique (session 33).
+  double min_corner_angle_deg = 45.0;
+  bool feet = false;       // a wall and the gentle region at its foot (re-entrant)
+  bool eaves = false;      // a wall and the roof on top of it (convex)
+  double local_fit = 3.0;  // feet and eaves: planes refitted within this many h of the line
   void Check() const;  // throws std::invalid_argument naming the bad field
 };
 
@@ -56,6 +74,7 @@ struct WallCorner {
   double half_length = 0.0;                              // of the stretch along it
   Eigen::Vector3d normal[2], centre[2];                  // the two walls' planes (normals outward)
   bool convex = true;
+  CreaseKind kind = CreaseKind::kVertical;
   std::vector<int> band;  // vertex indices
 };
 
@@ -63,6 +82,7 @@ struct WallCornerSearch {
   std::vector<WallCorner> corners;
   int regions = 0;       // planar regions
   int wall_regions = 0;  // of them steep
+  int count(CreaseKind kind) const;
 };
 
 WallCornerSearch FindWallCorners(const TinMesh& mesh, const WallCornerOptions& options);

@@ -137,6 +137,21 @@ double MeanCornerDistance(const TinMesh& mesh) {
   return sum / n;
 }
 
+double MeanLineDistance(const TinMesh& mesh, double y, double z) {
+  double sum = 0.0;
+  int n = 0;
+  for (double x = -2.0; x <= 2.0; x += 0.25, ++n) {
+    double best = 1e30;
+    for (auto f : mesh.faces()) {
+      auto it = mesh.cfv_iter(f);
+      const Eigen::Vector3d a = ToEigen(mesh.point(*it)), b = ToEigen(mesh.point(*++it)), c = ToEigen(mesh.point(*++it));
+      best = std::min(best, PointTriangleDistance(Eigen::Vector3d(x, y, z), a, b, c));
+    }
+    sum += best;
+  }
+  return sum / n;
+}
+
 // A real corner: tests/data/corner_patch.ply is the finest TIN of block_oblique
 // (--thorough-walls, Embree AVX2, session 31) around the 12 m building's north-east
 // corner, moved so that the corner is the Z axis (walls x = 0 and y = 0, 0.72 m edges).
@@ -170,6 +185,77 @@ TEST(WallCorners, RealCornerOfTheObliqueBlockComesCloserToItsLine) {
   EXPECT_LE(CountFoldedFaces(mesh), folded);
 }
 
+// A wall's profile extruded along X (x -3 .. 3, columns every kH): the ground z = 0 for
+// y -3 .. 0, the wall y = 0 (outward -Y) up to z = 4, a flat roof z = 4 for y 0 .. 3.
+// Nodes every kH along the profile, none on its two creases (the grid starts half a step
+// off), so the faces cut the foot and the eave off, as on an adjusted TIN; the foot's two
+// nearest nodes are pulled `crumple` m out into the air (a fillet, as the regularisation
+// rounds a foot), the eave's two pushed into the building.
+TinMesh FootAndEave(double crumple) {
+  const int columns = 13, nodes = 20;  // profile length 10 m
+  auto profile = [&](double s) -> Eigen::Vector2d {  // (y, z)
+    if (s <= 3.0) return {s - 3.0, 0.0};
+    if (s <= 7.0) return {0.0, s - 3.0};
+    return {s - 7.0, 4.0};
+  };
+  TinMesh mesh;
+  std::vector<TinMesh::VertexHandle> v(columns * nodes);
+  for (int j = 0; j < nodes; ++j) {
+    const double s = (j + 0.5) * kH;
+    Eigen::Vector2d p = profile(s);
+    if (std::abs(s - 3.0) < kH) p += crumple * (s < 3.0 ? Eigen::Vector2d(0.0, 1.0) : Eigen::Vector2d(-1.0, 0.0));
+    if (std::abs(s - 7.0) < kH) p += crumple * (s < 7.0 ? Eigen::Vector2d(1.0, 0.0) : Eigen::Vector2d(0.0, -1.0));
+    for (int i = 0; i < columns; ++i) v[i * nodes + j] = mesh.add_vertex({-3.0 + i * kH, p.x(), p.y()});
+  }
+  for (int i = 0; i + 1 < columns; ++i) {
+    for (int j = 0; j + 1 < nodes; ++j) {
+      const auto a = v[i * nodes + j], b = v[(i + 1) * nodes + j], c = v[(i + 1) * nodes + j + 1], d = v[i * nodes + j + 1];
+      mesh.add_face(a, b, c);  // outward: +Z on the ground, -Y on the wall
+      mesh.add_face(a, c, d);
+    }
+  }
+  UpdateVertexNormals(&mesh);
+  return mesh;
+}
+
+// Mean distance of a line along X (at y, z; x -2 .. 2 every 0.25 m) to the TIN's chords.
+double MeanLineDistance(const TinMesh& mesh, double y, double z);
+
+TEST(WallCorners, FootAndEaveAreFoundOnlyWhenAskedAndLaidOntoTheirPlanes) {
+  TinMesh mesh = FootAndEave(0.15);
+  const WallCornerSearch vertical_only = FindWallCorners(mesh, Options());
+  EXPECT_EQ(vertical_only.wall_regions, 1);
+  EXPECT_TRUE(vertical_only.corners.empty());
+  WallCornerOptions options = Options();
+  options.feet = options.eaves = true;
+  const WallCornerSearch search = FindWallCorners(mesh, options);
+  ASSERT_EQ(search.corners.size(), 2u);
+  ASSERT_EQ(search.count(CreaseKind::kFoot), 1);
+  ASSERT_EQ(search.count(CreaseKind::kEave), 1);
+  const double foot_before = MeanLineDistance(mesh, 0.0, 0.0), eave_before = MeanLineDistance(mesh, 0.0, 4.0);
+  EXPECT_GT(foot_before, 0.15);
+  EXPECT_GT(eave_before, 0.15);
+  for (const WallCorner& crease : search.corners) {
+    const double height = crease.kind == CreaseKind::kFoot ? 0.0 : 4.0;
+    EXPECT_EQ(crease.convex, crease.kind == CreaseKind::kEave);
+    EXPECT_NEAR(std::abs(crease.direction.x()), 1.0, 1e-9);
+    EXPECT_NEAR(crease.point.y(), 0.0, 1e-9);
+    EXPECT_NEAR(crease.point.z(), height, 1e-9);
+    // Half an edge short of the ends (x -3 and 3); the band leaves the border columns out.
+    EXPECT_NEAR(crease.half_length, 2.75, 1e-9);
+    const CornerLaying laid = LayCornerOntoWalls(&mesh, crease, options);
+    UpdateVertexNormals(&mesh);
+    // Both crumpled rows of the 11 inner columns reach the line's snap distance; one row
+    // on the line, the other back where it was (both there would leave faces without area).
+    EXPECT_EQ(laid.on_line, 11);
+    EXPECT_EQ(laid.left_off, 11);
+  }
+  EXPECT_LT(MeanLineDistance(mesh, 0.0, 0.0), 0.1 * foot_before);
+  EXPECT_LT(MeanLineDistance(mesh, 0.0, 4.0), 0.1 * eave_before);
+  EXPECT_EQ(CountFoldedFaces(mesh), 0);
+  EXPECT_EQ(CountSelfIntersections(mesh), 0);
+}
+
 TEST(WallCorners, GentleBendIsNoCorner) {
   // Normals 30 degrees apart: a bend of one wall, not a corner between two.
   TinMesh mesh = CornerWalls(30.0, 0.0);
@@ -178,12 +264,28 @@ TEST(WallCorners, GentleBendIsNoCorner) {
   EXPECT_TRUE(search.corners.empty());
 }
 
+TEST(WallCorners, ShallowCornerIsLeftAboveTheLeastAngle) {
+  // Normals 50 degrees apart (a chamfer's against its wall encloses about 45): a corner
+  // with the default least angle of 45 degrees, none with 60.
+  TinMesh mesh = CornerWalls(50.0, 0.0);
+  EXPECT_EQ(FindWallCorners(mesh, Options()).corners.size(), 1u);
+  WallCornerOptions options = Options();
+  options.min_corner_angle_deg = 60.0;
+  EXPECT_TRUE(FindWallCorners(mesh, options).corners.empty());
+}
+
 TEST(WallCorners, OptionsAreChecked) {
   WallCornerOptions options = Options();
   options.snap = 2.0;  // beyond the band
   EXPECT_THROW(options.Check(), std::invalid_argument);
   options = Options();
   options.edge_length = 0.0;
+  EXPECT_THROW(options.Check(), std::invalid_argument);
+  options = Options();
+  options.min_corner_angle_deg = 30.0;
+  EXPECT_THROW(options.Check(), std::invalid_argument);
+  options = Options();
+  options.local_fit = 0.0;
   EXPECT_THROW(options.Check(), std::invalid_argument);
 }
 

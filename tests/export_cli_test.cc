@@ -192,6 +192,13 @@ TEST(ReconstructCli, ThoroughWallsSetsTheVCycleBundleAndExplicitOptionsWin) {
   EXPECT_NE(bundle.find(settings(1, 1)), std::string::npos) << bundle;
   EXPECT_NE(bundle.find("stage v-cycle 1/1"), std::string::npos);
   EXPECT_EQ(bundle.find("stage v-cycle 1/2"), std::string::npos);
+  // The crease steps of the finest level: vertical corners, feet and eaves (sessions 32-33).
+  EXPECT_NE(bundle.find(", vertical corners laid onto their walls, walls' feet laid, eaves laid"), std::string::npos)
+      << bundle;
+  const std::string ini = FileText(dir / "bundle" / "settings.ini");
+  for (const char* key : {"wall-corners=true", "wall-feet=true", "wall-eaves=true"}) {
+    EXPECT_NE(ini.find(key), std::string::npos) << key << "\n" << ini;
+  }
   const std::string two = log_of("two", " --v-cycles 2 --normal-search-local-rings 3 --facet-pixels 2");
   EXPECT_NE(two.find(settings(2, 3, "2")), std::string::npos) << two;
   EXPECT_NE(two.find("stage v-cycle 2/2"), std::string::npos);
