@@ -140,7 +140,7 @@ WallCornerSearch FindWallCorners(const TinMesh& mesh, const WallCornerOptions& o
   options.Check();
   WallCornerSearch search;
   std::vector<int> face_region;
-  std::vector<Region> regions = GrowRegions(mesh, options, &face_region);
+  const std::vector<Region> regions = GrowRegions(mesh, options, &face_region);
   search.regions = static_cast<int>(regions.size());
   const double h = options.edge_length;
   const int nv = static_cast<int>(mesh.n_vertices());
@@ -217,7 +217,8 @@ WallCornerSearch FindWallCorners(const TinMesh& mesh, const WallCornerOptions& o
         if (!fitted) continue;
         const double c = plane[0].normal.dot(plane[1].normal);
         if (c > cos_max || c < cos_min) continue;
-        meet(plane[0], plane[1], q, &q, &dir);
+        const Eigen::Vector3d near_line = q;  // not an alias of the result
+        meet(plane[0], plane[1], near_line, &q, &dir);
       }
       // Each region's stretch along the line (its vertices within 2 edges of it), how
       // close it comes, and the mean of those vertices (which side of the other plane
