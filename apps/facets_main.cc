@@ -1,6 +1,7 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
+#include "apps/creases_command.h"
 #include "apps/evaluate_command.h"
 #include "apps/export_command.h"
 #include "apps/reconstruct_command.h"
@@ -21,6 +22,7 @@ int main(int argc, char** argv) {
   facets::AddEvaluateCommand(app);
   facets::AddReconstructCommand(app);
   facets::AddExportCommand(app);
+  facets::AddCreasesCommand(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
 }

@@ -160,9 +160,9 @@ void RunReconstruct(const ReconstructArgs& args) {
     bundle << "settings: --thorough-walls: " << args.v_cycles << " v-cycle(s), normal-search rounds in them down to level "
            << args.v_cycle_rounds_last_level << ", tolerance " << args.normal_search_tolerance << ", local rings "
            << args.normal_search_local_rings << ", grey facets of " << args.facet_pixels << " pixels"
-           << (args.wall_corners && !args.no_wall_corners ? ", vertical corners laid onto their walls" : "")
-           << (args.wall_feet && !args.no_wall_corners ? ", walls' feet laid" : "")
-           << (args.wall_eaves && !args.no_wall_corners ? ", eaves laid" : "");
+           << (args.wall_corners ? ", vertical corners laid onto their walls" : "")
+           << (args.wall_feet ? ", walls' feet laid" : "")
+           << (args.wall_eaves ? ", eaves laid" : "");
     say(bundle.str());
   }
   ImageBlock block;
@@ -289,9 +289,10 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.adjustment.fold_guard = !args.no_fold_guard;
   options.relax_unseen = !args.no_relax_unseen;
   options.fold_lips = !args.no_fold_lips;
-  options.wall_corners = args.wall_corners && !args.no_wall_corners;
-  options.wall_feet = args.wall_feet && !args.no_wall_corners;
-  options.wall_eaves = args.wall_eaves && !args.no_wall_corners;
+  // --no-wall-corners excludes the three flags and keeps --thorough-walls from setting them.
+  options.wall_corners = args.wall_corners;
+  options.wall_feet = args.wall_feet;
+  options.wall_eaves = args.wall_eaves;
   options.wall_corner_min_angle_deg = args.wall_corner_min_angle;
   options.untangle = !args.no_untangle;
   options.flatten_crossing_facets = !args.keep_crossing_facets;
@@ -322,10 +323,17 @@ void RunReconstruct(const ReconstructArgs& args) {
   if (args.keep_levels) {
     const std::filesystem::path dir = std::filesystem::path(args.out) / "levels";
     std::filesystem::create_directories(dir);
-    options.level_done = [dir](int level, const TinMesh& mesh) {
-      const std::string path = (dir / ("level_" + std::to_string(level) + ".ply")).string();
+    auto keep = [dir](const std::string& name, const TinMesh& mesh) {
+      const std::string path = (dir / name).string();
       WritePly(path + ".tmp", TinGeometryData(mesh));
       CommitTemporary(path + ".tmp", path);
+    };
+    options.level_done = [keep](int level, const TinMesh& mesh) {
+      keep("level_" + std::to_string(level) + ".ply", mesh);
+    };
+    // The TIN the corner step starts from, to replay that step without images.
+    options.creases_start = [keep](int level, const TinMesh& mesh) {
+      keep("level_" + std::to_string(level) + "_creases.ply", mesh);
     };
   }
   const Reconstruction result = Reconstruct(block, options);
@@ -669,7 +677,9 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_flag("--no-vrml", args->no_vrml, "do not write surface.wrl");
   sub->add_flag("--no-rasters", args->no_rasters, "do not write ortho.tif, dsm.tif, sigma.tif");
   sub->add_flag("--no-preview", args->no_preview, "do not write preview.png");
-  sub->add_flag("--keep-levels", args->keep_levels, "also write each level's TIN as levels/level_K.ply (K = pyramid level)");
+  sub->add_flag("--keep-levels", args->keep_levels,
+                "also write each level's TIN as levels/level_K.ply (K = pyramid level), and the TIN the "
+                "corner step starts from as levels/level_K_creases.ply");
   auto* corners_on = sub->add_flag(
       "--wall-corners", args->wall_corners,
       "finest level: split the edges walls stretched, then lay each vertical corner's band onto its two walls and "

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
@@ -766,6 +767,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       corner_options.feet = options.wall_feet;
       corner_options.eaves = options.wall_eaves;
       corner_options.min_corner_angle_deg = options.wall_corner_min_angle_deg;
+      if (options.creases_start) options.creases_start(level, mesh);
       WallCornerSearch search = FindWallCorners(mesh, corner_options);
       // Vertical corners first (their bands end half an edge above the foot and below
       // the eave), then feet and eaves.
@@ -789,7 +791,8 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
         std::ostringstream line;
         line.precision(3);
         line << std::fixed << "  level " << level << ": " << CreaseName(corner.kind) << " at (" << corner.point.x()
-             << ", " << corner.point.y() << ", " << corner.point.z() << "), " << laid.moved << " vertices (" << laid.on_line
+             << ", " << corner.point.y() << ", " << corner.point.z() << "), planes " << std::setprecision(1)
+             << corner.angle_deg() << std::setprecision(3) << " deg apart, " << laid.moved << " vertices (" << laid.on_line
              << " onto the line), max move " << laid.max_move << " m";
         int crossing_now = CountSelfIntersections(mesh), folded_now = CountFoldedFaces(mesh);
         if ((crossing_now > crossing || folded_now > folded) && options.fold_lips_untangle_rounds > 0) {

@@ -137,7 +137,7 @@ struct ReconstructionOptions {
   bool wall_eaves = false;
   int wall_corners_local_rings = 2;
   double wall_corners_tolerance = 0.0;
-  double wall_corner_min_angle_deg = 45.0;  // WallCornerOptions::min_corner_angle_deg
+  double wall_corner_min_angle_deg = 60.0;  // WallCornerOptions::min_corner_angle_deg
   // After each level: triangle pairs that cross (between windows, after splits: the
   // fold guard only sees one window's step) are untangled by local smoothing of their
   // corners and rings (UntangleSelfIntersections, mesh/surface_validity.h).
@@ -251,6 +251,10 @@ struct ReconstructionOptions {
   // Called with each level's TIN once the level is finished (e.g. to keep it for a look
   // at how the multigrid got there).
   std::function<void(int level, const TinMesh& mesh)> level_done;
+  // Called with the finest level's TIN as the corner step (wall_corners, wall_feet,
+  // wall_eaves) finds its creases: after the splits and their adjustment, before any
+  // crease is laid (e.g. to replay the step on it without images).
+  std::function<void(int level, const TinMesh& mesh)> creases_start;
 
   void Check() const;  // throws std::invalid_argument naming the option
 };

@@ -131,6 +131,10 @@ const char* CreaseName(CreaseKind kind) {
   }
 }
 
+double WallCorner::angle_deg() const {
+  return std::acos(std::clamp(normal[0].dot(normal[1]), -1.0, 1.0)) / kDeg;
+}
+
 int WallCornerSearch::count(CreaseKind kind) const {
   return static_cast<int>(std::count_if(corners.begin(), corners.end(),
                                         [kind](const WallCorner& c) { return c.kind == kind; }));

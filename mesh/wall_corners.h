@@ -60,8 +60,9 @@ struct WallCornerOptions {
   bool vertical = true;    // two walls
   // Least angle between two walls' normals for a vertical corner (feet and eaves: 45).
   // A one-face chamfer cut across a right-angled corner encloses about 45 degrees with
-  // each wall and made a false corner on block_oblique (session 33).
-  double min_corner_angle_deg = 45.0;
+  // each wall and made a false corner on block_oblique (session 33: 48 degrees); 60
+  // leaves it out, and a building's corners are far steeper (session 34).
+  double min_corner_angle_deg = 60.0;
   bool feet = false;       // a wall and the gentle region at its foot (re-entrant)
   bool eaves = false;      // a wall and the roof on top of it (convex)
   double local_fit = 3.0;  // feet and eaves: planes refitted within this many h of the line
@@ -76,6 +77,7 @@ struct WallCorner {
   bool convex = true;
   CreaseKind kind = CreaseKind::kVertical;
   std::vector<int> band;  // vertex indices
+  double angle_deg() const;  // between the two planes' normals (90: a right-angled crease)
 };
 
 struct WallCornerSearch {

@@ -265,13 +265,17 @@ TEST(WallCorners, GentleBendIsNoCorner) {
 }
 
 TEST(WallCorners, ShallowCornerIsLeftAboveTheLeastAngle) {
-  // Normals 50 degrees apart (a chamfer's against its wall encloses about 45): a corner
-  // with the default least angle of 45 degrees, none with 60.
+  // Normals 50 degrees apart (a chamfer's against its wall encloses about 45): no corner
+  // with the default least angle of 60 degrees, one with 45; walls 61 degrees apart make
+  // one with the default.
   TinMesh mesh = CornerWalls(50.0, 0.0);
-  EXPECT_EQ(FindWallCorners(mesh, Options()).corners.size(), 1u);
+  EXPECT_TRUE(FindWallCorners(mesh, Options()).corners.empty());
   WallCornerOptions options = Options();
-  options.min_corner_angle_deg = 60.0;
-  EXPECT_TRUE(FindWallCorners(mesh, options).corners.empty());
+  options.min_corner_angle_deg = 45.0;
+  const WallCornerSearch shallow = FindWallCorners(mesh, options);
+  ASSERT_EQ(shallow.corners.size(), 1u);
+  EXPECT_NEAR(shallow.corners[0].angle_deg(), 50.0, 1.0);
+  EXPECT_EQ(FindWallCorners(CornerWalls(61.0, 0.0), Options()).corners.size(), 1u);
 }
 
 TEST(WallCorners, OptionsAreChecked) {

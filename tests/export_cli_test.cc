@@ -188,7 +188,7 @@ TEST(ReconstructCli, ThoroughWallsSetsTheVCycleBundleAndExplicitOptionsWin) {
            " v-cycle(s), normal-search rounds in them down to level 0, tolerance 1, local rings " +
            std::to_string(rings) + ", grey facets of " + facet_pixels + " pixels";
   };
-  const std::string bundle = log_of("bundle", "");
+  const std::string bundle = log_of("bundle", " --keep-levels");
   EXPECT_NE(bundle.find(settings(1, 1)), std::string::npos) << bundle;
   EXPECT_NE(bundle.find("stage v-cycle 1/1"), std::string::npos);
   EXPECT_EQ(bundle.find("stage v-cycle 1/2"), std::string::npos);
@@ -199,6 +199,16 @@ TEST(ReconstructCli, ThoroughWallsSetsTheVCycleBundleAndExplicitOptionsWin) {
   for (const char* key : {"wall-corners=true", "wall-feet=true", "wall-eaves=true"}) {
     EXPECT_NE(ini.find(key), std::string::npos) << key << "\n" << ini;
   }
+  // --keep-levels also keeps the TIN the corner step started from (to replay the step).
+  for (const char* name : {"level_1.ply", "level_0.ply", "level_0_creases.ply"}) {
+    EXPECT_GT(FileText(dir / "bundle" / "levels" / name).size(), 1000u) << name;
+  }
+  // --no-wall-corners leaves all three crease steps out of the bundle.
+  const std::string none = log_of("none", " --no-wall-corners");
+  EXPECT_NE(none.find(settings(1, 1)), std::string::npos) << none;
+  EXPECT_EQ(none.find("vertical corners laid"), std::string::npos) << none;
+  EXPECT_EQ(none.find("corners:"), std::string::npos) << none;
+  EXPECT_EQ(FileText(dir / "none" / "settings.ini").find("\nwall-corners=true"), std::string::npos);
   const std::string two = log_of("two", " --v-cycles 2 --normal-search-local-rings 3 --facet-pixels 2");
   EXPECT_NE(two.find(settings(2, 3, "2")), std::string::npos) << two;
   EXPECT_NE(two.find("stage v-cycle 2/2"), std::string::npos);
@@ -222,6 +232,35 @@ TEST(ReconstructCli, ThoroughWallsSetsTheVCycleBundleAndExplicitOptionsWin) {
   EXPECT_NE(Facets("reconstruct --config " + (dir / "bad.ini").string() + " --out " + (dir / "bad").string(), &err), 0);
   EXPECT_NE(err.find("levles"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(dir / "bad" / "tin.ply"));
+}
+
+// `facets creases` (session 34): the crease step without images on a real corner of
+// block_oblique (tests/data/corner_patch.ply, walls x = 0 and y = 0, 0.72 m edges): one
+// vertical corner found and laid, no crossing or fold added, the TIN written; bad input
+// named.
+TEST(CreasesCli, LaysTheRealCornerWithoutImagesAndNamesBadInput) {
+  const fs::path dir = fs::path(testing::TempDir()) / "facets_creases_cli";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string patch = std::string(FACETS_SOURCE_DIR) + "/tests/data/corner_patch.ply";
+  const fs::path out = dir / "laid.ply";
+  const std::string command = std::string(FACETS_CLI) + " creases " + patch + " --edge 0.72 --no-feet --no-eaves --out " +
+                              out.string() + " > " + (dir / "log.txt").string() + " 2>&1";
+  ASSERT_EQ(std::system(command.c_str()), 0) << FileText(dir / "log.txt");
+  const std::string log = FileText(dir / "log.txt");
+  EXPECT_NE(log.find(" 1 vertical corners, 0 feet, 0 eaves"), std::string::npos) << log;
+  EXPECT_NE(log.find("corner at ("), std::string::npos) << log;
+  EXPECT_NE(log.find("summary: 1 creases found, 1 laid, 0 left"), std::string::npos) << log;
+  EXPECT_GT(FileText(out).size(), 1000u);
+  EXPECT_FALSE(fs::exists(out.string() + ".tmp"));
+
+  std::string err;
+  EXPECT_EQ(Facets("creases " + (dir / "missing.ply").string() + " --edge 0.72 --out " + (dir / "x.ply").string(), &err),
+            1);
+  EXPECT_NE(err.find("missing.ply"), std::string::npos) << err;
+  EXPECT_EQ(Facets("creases " + patch + " --edge 0 --out " + (dir / "x.ply").string(), &err), 1);
+  EXPECT_NE(err.find("--edge must be > 0"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(dir / "x.ply"));
 }
 
 }  // namespace
