@@ -26,13 +26,15 @@ CreasesSummary RunCreases(const CreasesArgs& args, std::ostream& log) {
   options.feet = !args.no_feet;
   options.eaves = !args.no_eaves;
   if (args.min_angle > 0.0) options.min_corner_angle_deg = args.min_angle;
+  options.merge_wall_pieces = !args.no_merge;
   options.Check();
   WallCornerSearch search = FindWallCorners(mesh, options);
   // The engine's order: vertical corners first (their bands end short of feet and eaves).
   std::stable_sort(search.corners.begin(), search.corners.end(),
                    [](const WallCorner& a, const WallCorner& b) { return a.kind < b.kind; });
   log << args.tin << ": " << mesh.n_vertices() << " vertices, " << mesh.n_faces() << " faces; " << search.regions
-      << " planar regions (" << search.wall_regions << " walls), " << search.count(CreaseKind::kVertical)
+      << " planar regions (" << search.wall_regions << " walls, "
+      << search.merged_walls << " wall pieces merged), " << search.count(CreaseKind::kVertical)
       << " vertical corners, " << search.count(CreaseKind::kFoot) << " feet, " << search.count(CreaseKind::kEave)
       << " eaves\n";
   CreasesSummary summary;
@@ -94,6 +96,7 @@ void AddCreasesCommand(CLI::App& app) {
   sub->add_option("--min-angle", args->min_angle,
                   "least angle in degrees between two walls' normals for a vertical corner (default as "
                   "--wall-corner-min-angle)");
+  sub->add_flag("--no-merge", args->no_merge, "keep the planar wall pieces apart (as --no-wall-merge)");
   sub->add_option("--untangle-rounds", args->untangle_rounds, "untangling rounds before a crease is left")
       ->capture_default_str();
   sub->callback([args] {

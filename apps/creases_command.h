@@ -23,6 +23,7 @@ struct CreasesArgs {
   double edge = 0.0;  // the level's target edge length, m (the reconstruction's log)
   bool no_corners = false, no_feet = false, no_eaves = false;
   double min_angle = 0.0;  // 0: WallCornerOptions' default
+  bool no_merge = false;   // WallCornerOptions::merge_wall_pieces off
   int untangle_rounds = 4;
 };
 

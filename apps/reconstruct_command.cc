@@ -132,6 +132,7 @@ struct ReconstructArgs {
   bool wall_eaves = false;    // ... --wall-eaves
   double wall_corner_min_angle = ReconstructionOptions().wall_corner_min_angle_deg;
   bool no_wall_corners = false;
+  bool no_wall_merge = false;
   bool no_untangle = false;
   bool keep_crossing_facets = false;
   bool sector_regularisation = false;
@@ -294,6 +295,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.wall_feet = args.wall_feet;
   options.wall_eaves = args.wall_eaves;
   options.wall_corner_min_angle_deg = args.wall_corner_min_angle;
+  options.wall_merge_pieces = !args.no_wall_merge;
   options.untangle = !args.no_untangle;
   options.flatten_crossing_facets = !args.keep_crossing_facets;
   options.adjustment.sector_regularisation = args.sector_regularisation;
@@ -693,6 +695,9 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--wall-corner-min-angle", args->wall_corner_min_angle,
                   "least angle in degrees between two walls' normals for a vertical corner (45..90)")
       ->capture_default_str();
+  sub->add_flag("--no-wall-merge", args->no_wall_merge,
+                "corner step: keep the planar wall pieces apart instead of merging those within an edge of each "
+                "other that one plane fits");
   sub->add_flag("--no-wall-corners", args->no_wall_corners,
                 "no corner, foot or eave laying, also with --thorough-walls")
       ->excludes(corners_on)

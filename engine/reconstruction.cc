@@ -767,6 +767,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       corner_options.feet = options.wall_feet;
       corner_options.eaves = options.wall_eaves;
       corner_options.min_corner_angle_deg = options.wall_corner_min_angle_deg;
+      corner_options.merge_wall_pieces = options.wall_merge_pieces;
       if (options.creases_start) options.creases_start(level, mesh);
       WallCornerSearch search = FindWallCorners(mesh, corner_options);
       // Vertical corners first (their bands end half an edge above the foot and below
@@ -777,7 +778,9 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       level_report.feet_found = search.count(CreaseKind::kFoot);
       level_report.eaves_found = search.count(CreaseKind::kEave);
       say("  level " + std::to_string(level) + " corners: " + std::to_string(search.regions) + " planar regions (" +
-          std::to_string(search.wall_regions) + " walls), " + std::to_string(level_report.corners_found) +
+          std::to_string(search.wall_regions) + " walls" +
+          (search.merged_walls > 0 ? ", " + std::to_string(search.merged_walls) + " wall pieces merged" : std::string()) +
+          "), " + std::to_string(level_report.corners_found) +
           " vertical corners" +
           (options.wall_feet ? ", " + std::to_string(level_report.feet_found) + " feet" : std::string()) +
           (options.wall_eaves ? ", " + std::to_string(level_report.eaves_found) + " eaves" : std::string()));

@@ -138,6 +138,7 @@ struct ReconstructionOptions {
   int wall_corners_local_rings = 2;
   double wall_corners_tolerance = 0.0;
   double wall_corner_min_angle_deg = 60.0;  // WallCornerOptions::min_corner_angle_deg
+  bool wall_merge_pieces = true;            // WallCornerOptions::merge_wall_pieces
   // After each level: triangle pairs that cross (between windows, after splits: the
   // fold guard only sees one window's step) are untangled by local smoothing of their
   // corners and rings (UntangleSelfIntersections, mesh/surface_validity.h).

@@ -109,6 +109,99 @@ std::vector<Region> GrowRegions(const TinMesh& mesh, const WallCornerOptions& o,
   return regions;
 }
 
+// One wall often comes out of GrowRegions in pieces: where its faces crumple near a
+// corner, or a lower band leans a few degrees off, the growth stops at a face and starts
+// again beyond it, and a piece that shares no edge with the rest keeps its own plane
+// (block_oblique, session 34: the west wall of building 5 as a region z 1.3..4.9 and
+// another z 0.4..2.0, 9 degrees off). Steep regions whose vertices come within one edge
+// of each other (they share a vertex, or an edge joins them) are merged when their
+// normals lie within region_angle_deg and one plane fits both within region_tolerance,
+// the most parallel pairs first; the merged region's plane is the fit of all its faces.
+// Returns the number of merges.
+int MergeWallPieces(const TinMesh& mesh, const WallCornerOptions& o, std::vector<int>* face_region,
+                    std::vector<Region>* regions) {
+  const int nr = static_cast<int>(regions->size());
+  const double cos_angle = std::cos(o.region_angle_deg * kDeg);
+  const double tol = o.region_tolerance * o.edge_length;
+  std::vector<bool> steep(nr);
+  for (int r = 0; r < nr; ++r) steep[r] = std::abs((*regions)[r].normal.z()) < kSteepMaxNz;
+  std::vector<std::vector<int>> faces(nr);
+  for (int f = 0; f < static_cast<int>(face_region->size()); ++f) {
+    if ((*face_region)[f] >= 0) faces[(*face_region)[f]].push_back(f);
+  }
+  // The steep regions around each vertex, then the pairs an edge (or a vertex) joins.
+  std::vector<std::vector<int>> around(mesh.n_vertices());
+  for (auto f : mesh.faces()) {
+    const int r = (*face_region)[f.idx()];
+    if (r < 0 || !steep[r]) continue;
+    for (auto v : mesh.fv_range(f)) {
+      std::vector<int>& list = around[v.idx()];
+      if (std::find(list.begin(), list.end(), r) == list.end()) list.push_back(r);
+    }
+  }
+  std::vector<std::pair<int, int>> pairs;
+  auto add_pairs = [&](const std::vector<int>& a, const std::vector<int>& b) {
+    for (int i : a) {
+      for (int j : b) {
+        if (i != j) pairs.emplace_back(std::min(i, j), std::max(i, j));
+      }
+    }
+  };
+  for (auto e : mesh.edges()) {
+    const auto he = mesh.halfedge_handle(e, 0);
+    const int u = mesh.from_vertex_handle(he).idx(), v = mesh.to_vertex_handle(he).idx();
+    add_pairs(around[u], around[v]);
+    add_pairs(around[u], around[u]);
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  std::stable_sort(pairs.begin(), pairs.end(), [&](const std::pair<int, int>& a, const std::pair<int, int>& b) {
+    return (*regions)[a.first].normal.dot((*regions)[a.second].normal) >
+           (*regions)[b.first].normal.dot((*regions)[b.second].normal);
+  });
+  std::vector<int> root(nr);
+  std::iota(root.begin(), root.end(), 0);
+  auto find = [&](int r) {
+    while (root[r] != r) r = root[r] = root[root[r]];
+    return r;
+  };
+  int merges = 0;
+  for (bool again = true; again;) {
+    again = false;
+    for (const auto& [i, j] : pairs) {
+      const int a = find(i), b = find(j);
+      if (a == b) continue;
+      if ((*regions)[a].normal.dot((*regions)[b].normal) < cos_angle) continue;
+      std::vector<int> both = faces[a];
+      both.insert(both.end(), faces[b].begin(), faces[b].end());
+      const PrincipalAxes fit = FitFaces(mesh, both);
+      if (std::sqrt(std::max(0.0, fit.eigenvalues(0)) / (3.0 * both.size())) > tol) continue;
+      const Eigen::Vector3d n = fit.Normal().dot((*regions)[a].normal) < 0.0 ? Eigen::Vector3d(-fit.Normal()) : fit.Normal();
+      if (std::abs(n.z()) >= kSteepMaxNz) continue;
+      const int keep = std::min(a, b), gone = std::max(a, b);
+      root[gone] = keep;
+      faces[keep] = std::move(both);
+      faces[gone].clear();
+      (*regions)[keep] = {fit.centre, n};
+      ++merges;
+      again = true;
+    }
+  }
+  if (merges == 0) return 0;
+  std::vector<int> renumber(nr, -1);
+  std::vector<Region> merged;
+  for (int r = 0; r < nr; ++r) {
+    if (find(r) != r) continue;
+    renumber[r] = static_cast<int>(merged.size());
+    merged.push_back((*regions)[r]);
+  }
+  for (int& r : *face_region) {
+    if (r >= 0) r = renumber[find(r)];
+  }
+  *regions = std::move(merged);
+  return merges;
+}
+
 }  // namespace
 
 void WallCornerOptions::Check() const {
@@ -144,7 +237,8 @@ WallCornerSearch FindWallCorners(const TinMesh& mesh, const WallCornerOptions& o
   options.Check();
   WallCornerSearch search;
   std::vector<int> face_region;
-  const std::vector<Region> regions = GrowRegions(mesh, options, &face_region);
+  std::vector<Region> regions = GrowRegions(mesh, options, &face_region);
+  if (options.merge_wall_pieces) search.merged_walls = MergeWallPieces(mesh, options, &face_region, &regions);
   search.regions = static_cast<int>(regions.size());
   const double h = options.edge_length;
   const int nv = static_cast<int>(mesh.n_vertices());

@@ -13,7 +13,10 @@
 // and its corners lie within region_tolerance edge lengths of the region's plane
 // (flattest faces seed first; the plane refitted as the region doubles); regions of at
 // least min_region_faces faces whose total-least-squares plane fits within the
-// tolerance are kept. Two steep regions (normals more than 60 degrees from +Z) whose
+// tolerance are kept. A wall grown in pieces (its faces crumpled near a corner, a lower
+// band a few degrees off) is put together again: steep regions whose vertices come
+// within one edge of each other merge when their normals lie within region_angle_deg
+// and one plane fits both within the tolerance (merge_wall_pieces). Two steep regions (normals more than 60 degrees from +Z) whose
 // normals enclose 45-135 degrees make a corner where their planes meet when both come
 // within 1.6 edges of that line and run beside it together over at least two edges
 // (the corner spans that common stretch, half an edge short of each end, so the eave
@@ -63,6 +66,9 @@ struct WallCornerOptions {
   // each wall and made a false corner on block_oblique (session 33: 48 degrees); 60
   // leaves it out, and a building's corners are far steeper (session 34).
   double min_corner_angle_deg = 60.0;
+  // Steep regions within an edge of each other that one plane fits merged into one wall
+  // before the pairs are formed (a wall grown in pieces near a corner; session 35).
+  bool merge_wall_pieces = true;
   bool feet = false;       // a wall and the gentle region at its foot (re-entrant)
   bool eaves = false;      // a wall and the roof on top of it (convex)
   double local_fit = 3.0;  // feet and eaves: planes refitted within this many h of the line
@@ -84,6 +90,7 @@ struct WallCornerSearch {
   std::vector<WallCorner> corners;
   int regions = 0;       // planar regions
   int wall_regions = 0;  // of them steep
+  int merged_walls = 0;  // wall pieces merged into another (merge_wall_pieces)
   int count(CreaseKind kind) const;
 };
 

@@ -20,8 +20,10 @@ constexpr double kH = 0.5;  // edge length of the test walls
 // on x = 0, outward +X), 3 m each; columns every kH along the footprint, none on the
 // corner (the grid starts half a column off it), so the edges across the corner cut it
 // off, as on an adjusted TIN. The two columns beside the corner are pulled `crumple` m
-// into the building, each along its own wall's normal.
-TinMesh CornerWalls(double turn_deg, double crumple) {
+// into the building, each along its own wall's normal. Below z = 1.5 the first wall
+// leans `foot_lean_deg` inward (a lower band a few degrees off, as adjusted walls come
+// out near a corner).
+TinMesh CornerWalls(double turn_deg, double crumple, double foot_lean_deg = 0.0) {
   const double turn = turn_deg * M_PI / 180.0;
   const Eigen::Vector2d along_b(std::cos(-turn), std::sin(-turn));
   auto footprint = [&](double s) -> Eigen::Vector2d {
@@ -38,7 +40,11 @@ TinMesh CornerWalls(double turn_deg, double crumple) {
       const Eigen::Vector2d inward = s < 0.0 ? Eigen::Vector2d(0.0, -1.0) : Eigen::Vector2d(along_b.y(), -along_b.x());
       p += crumple * inward;
     }
-    for (int j = 0; j < rows; ++j) v[i * rows + j] = mesh.add_vertex({p.x(), p.y(), j * kH});
+    for (int j = 0; j < rows; ++j) {
+      const double z = j * kH;
+      const double lean = s < 0.0 && z < 1.5 ? (1.5 - z) * std::tan(foot_lean_deg * M_PI / 180.0) : 0.0;
+      v[i * rows + j] = mesh.add_vertex({p.x(), p.y() - lean, z});
+    }
   }
   for (int i = 0; i + 1 < columns; ++i) {
     for (int j = 0; j + 1 < rows; ++j) {
@@ -276,6 +282,29 @@ TEST(WallCorners, ShallowCornerIsLeftAboveTheLeastAngle) {
   ASSERT_EQ(shallow.corners.size(), 1u);
   EXPECT_NEAR(shallow.corners[0].angle_deg(), 50.0, 1.0);
   EXPECT_EQ(FindWallCorners(CornerWalls(61.0, 0.0), Options()).corners.size(), 1u);
+}
+
+TEST(WallCorners, WallGrownInPiecesIsMergedAndItsCornerSpansTheHeight) {
+  // The first wall's lower band leans 6 degrees: its faces stop the growth of the wall's
+  // region a little below the kink and make a region of their own, which alone runs
+  // beside the corner over less than two edges.
+  TinMesh mesh = CornerWalls(90.0, 0.0, 6.0);
+  WallCornerOptions apart = Options();
+  apart.merge_wall_pieces = false;
+  const WallCornerSearch pieces = FindWallCorners(mesh, apart);
+  EXPECT_EQ(pieces.wall_regions, 3);
+  EXPECT_EQ(pieces.merged_walls, 0);
+  for (const WallCorner& corner : pieces.corners) EXPECT_LT(corner.half_length, 1.5);
+
+  const WallCornerSearch merged = FindWallCorners(mesh, Options());
+  EXPECT_EQ(merged.merged_walls, 1);
+  EXPECT_EQ(merged.wall_regions, 2);
+  ASSERT_EQ(merged.corners.size(), 1u);
+  // Foot to top, half an edge short of each (the merged plane leans a little: 1.747).
+  EXPECT_NEAR(merged.corners[0].half_length, 1.75, 0.01);
+  EXPECT_NEAR(merged.corners[0].angle_deg(), 90.0, 3.0);
+  // A wall 30 degrees off its neighbour is not merged into it.
+  EXPECT_EQ(FindWallCorners(CornerWalls(30.0, 0.0), Options()).merged_walls, 0);
 }
 
 TEST(WallCorners, OptionsAreChecked) {
