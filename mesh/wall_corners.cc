@@ -147,11 +147,10 @@ int MergeWallPieces(const TinMesh& mesh, const WallCornerOptions& o, std::vector
       }
     }
   };
+  for (const std::vector<int>& list : around) add_pairs(list, list);  // a shared vertex
   for (auto e : mesh.edges()) {
     const auto he = mesh.halfedge_handle(e, 0);
-    const int u = mesh.from_vertex_handle(he).idx(), v = mesh.to_vertex_handle(he).idx();
-    add_pairs(around[u], around[v]);
-    add_pairs(around[u], around[u]);
+    add_pairs(around[mesh.from_vertex_handle(he).idx()], around[mesh.to_vertex_handle(he).idx()]);
   }
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
