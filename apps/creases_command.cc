@@ -7,11 +7,11 @@
 #include <stdexcept>
 #include <utility>
 
-#include "engine/products.h"
+#include "engine/pipeline/products.h"
 #include "io/ply_io.h"
 #include "mesh/surface_validity.h"
 #include "mesh/tin.h"
-#include "mesh/wall_corners.h"
+#include "refine/wall_corners.h"
 
 namespace facets {
 

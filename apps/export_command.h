@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/products.h"
+#include "engine/pipeline/products.h"
 
 namespace facets {
 

@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "engine/products.h"
-#include "engine/reconstruction.h"
+#include "engine/pipeline/products.h"
+#include "engine/pipeline/reconstruction.h"
 #include "io/atomic_file.h"
 #include "io/colmap_io.h"
 #include "io/ply_io.h"

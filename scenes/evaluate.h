@@ -24,7 +24,7 @@
 
 #include "io/image_block.h"
 #include "io/ply_io.h"
-#include "mesh/facet_crossings.h"
+#include "refine/facet_crossings.h"
 
 namespace facets {
 

@@ -7,9 +7,9 @@
 #include <iostream>
 #include <random>
 
-#include "engine/level_images.h"
-#include "engine/reconstruction.h"
-#include "engine/start_closed.h"
+#include "engine/images/level_images.h"
+#include "engine/pipeline/reconstruction.h"
+#include "engine/start/start_closed.h"
 #include "io/colmap_io.h"
 #include "io/ply_io.h"
 #include "mesh/closed_surface.h"

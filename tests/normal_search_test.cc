@@ -6,11 +6,11 @@
 #include <algorithm>
 #include <iostream>
 
-#include "engine/level_images.h"
-#include "engine/normal_search.h"
-#include "engine/patch_score.h"
-#include "engine/plane_propagation.h"
-#include "engine/reconstruction.h"
+#include "engine/images/level_images.h"
+#include "engine/search/normal_search.h"
+#include "engine/search/patch_score.h"
+#include "engine/search/plane_propagation.h"
+#include "engine/pipeline/reconstruction.h"
 #include "io/colmap_io.h"
 #include "mesh/closed_surface.h"
 #include "scenes/evaluate.h"

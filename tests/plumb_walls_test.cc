@@ -13,7 +13,7 @@
 #include <cmath>
 #include <iostream>
 
-#include "engine/reconstruction.h"
+#include "engine/pipeline/reconstruction.h"
 #include "mesh/surface_validity.h"
 #include "tests/rendered_scene.h"
 

@@ -12,7 +12,7 @@
 #include <iostream>
 #include <vector>
 
-#include "engine/reconstruction.h"
+#include "engine/pipeline/reconstruction.h"
 #include "io/colmap_io.h"
 #include "scenes/renderer.h"
 #include "scenes/scene.h"

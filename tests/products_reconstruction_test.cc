@@ -15,8 +15,8 @@
 #include <iostream>
 #include <string>
 
-#include "engine/products.h"
-#include "engine/reconstruction.h"
+#include "engine/pipeline/products.h"
+#include "engine/pipeline/reconstruction.h"
 #include "io/colmap_io.h"
 #include "io/raster_io.h"
 #include "scenes/renderer.h"

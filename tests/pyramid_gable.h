@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "engine/reconstruction.h"
+#include "engine/pipeline/reconstruction.h"
 #include "io/colmap_io.h"
 #include "scenes/evaluate.h"
 #include "scenes/renderer.h"

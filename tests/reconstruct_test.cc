@@ -9,8 +9,8 @@
 #include <utility>
 #include <vector>
 
-#include "engine/level_image_store.h"
-#include "engine/reconstruction.h"
+#include "engine/images/level_image_store.h"
+#include "engine/pipeline/reconstruction.h"
 #include "io/colmap_io.h"
 #include "scenes/evaluate.h"
 #include "scenes/renderer.h"

@@ -12,9 +12,9 @@
 
 #include <Eigen/Geometry>
 
-#include "engine/pcg.h"
-#include "engine/level_images.h"
-#include "engine/window_adjustment.h"
+#include "engine/solver/pcg.h"
+#include "engine/images/level_images.h"
+#include "engine/solver/window_adjustment.h"
 #include "io/colmap_io.h"
 #include "io/image_io.h"
 #include "mesh/tin.h"

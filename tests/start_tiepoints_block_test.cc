@@ -9,7 +9,7 @@
 #include <iostream>
 #include <random>
 
-#include "engine/start_tiepoints.h"
+#include "engine/start/start_tiepoints.h"
 #include "mesh/tessellation.h"
 #include "scenes/camera_layout.h"
 #include "scenes/evaluate.h"

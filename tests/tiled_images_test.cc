@@ -5,7 +5,7 @@
 
 #include <filesystem>
 
-#include "engine/reconstruction.h"
+#include "engine/pipeline/reconstruction.h"
 #include "io/colmap_io.h"
 #include "scenes/renderer.h"
 #include "scenes/scene.h"

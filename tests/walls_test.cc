@@ -8,9 +8,9 @@
 #include <algorithm>
 #include <iostream>
 
-#include "engine/reconstruction.h"
+#include "engine/pipeline/reconstruction.h"
 #include "mesh/closed_surface.h"
-#include "mesh/facet_crossings.h"
+#include "refine/facet_crossings.h"
 #include "mesh/surface_validity.h"
 #include "scenes/evaluate.h"
 #include "tests/rendered_scene.h"

@@ -11,9 +11,9 @@
 #include <iostream>
 #include <string>
 
-#include "engine/level_images.h"
-#include "engine/level_windows.h"
-#include "engine/local_readjustment.h"
+#include "engine/images/level_images.h"
+#include "engine/pipeline/level_windows.h"
+#include "engine/pipeline/local_readjustment.h"
 #include "io/colmap_io.h"
 #include "scenes/renderer.h"
 #include "scenes/scene.h"

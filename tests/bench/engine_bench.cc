@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "engine/level_images.h"
-#include "engine/window_adjustment.h"
+#include "engine/images/level_images.h"
+#include "engine/solver/window_adjustment.h"
 #include "io/colmap_io.h"
 #include "io/image_io.h"
 #include "mesh/tin.h"

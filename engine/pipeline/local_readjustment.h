@@ -1,0 +1,43 @@
+// A local re-adjustment of a level (the normal search's rounds with
+// ReconstructionOptions::normal_search_local_rings): after a search moved some vertices
+// of an adjusted level, only the windows over the faces within a few edge rings of them
+// run again (LocalScope, engine/level_windows.h), and the round is judged by those
+// windows' sigma0 before and after it (one linearisation each). On the rendered block's
+// level 0 a round then costs about 20 s instead of 35 s (docs/EXPERIMENTS.md, session 15).
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include "engine/pipeline/level_windows.h"
+#include "mesh/tin.h"
+
+namespace facets {
+
+struct LocalReadjustment {
+  // The level's adjustment with the local windows' results in: surface, per-vertex and
+  // grey values; its summary's sigma0, observations and redundancy pooled with the local
+  // windows' share replaced (margins counted in every window that holds them, as in the
+  // level's own pooling; their converged sigma0 before estimated from the one after and
+  // the two probes); per-window reports those of `adjusted`.
+  LevelAdjustment level;
+  // Of the local windows, each from one linearisation of a copy: on `before`, and on the
+  // surface their adjustment left.
+  double sigma0_before = 0.0;
+  double sigma0_after = 0.0;
+  int windows = 0;             // 0: no vertex moved, nothing done
+};
+
+// `mesh` is `before` with some vertices moved (same vertex and face counts; edges among
+// the faces around moved vertices may be flipped, as the crease straightening does:
+// those faces are in the local windows' cores, so no grey value of `adjusted` is taken
+// for them by face index); `adjusted` is the adjustment `before` came from. Windows over
+// the faces within `rings` edge rings of the moved vertices are adjusted in place.
+LocalReadjustment ReadjustAroundMovedVertices(TinMesh* mesh, const TinMesh& before,
+                                              const LevelAdjustment& adjusted, int rings,
+                                              const WindowImages& images,
+                                              const AdjustmentOptions& adjustment,
+                                              const LevelWindowOptions& options, bool keep_grey,
+                                              const std::function<void(const std::string&)>& progress);
+
+}  // namespace facets

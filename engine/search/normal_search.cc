@@ -1,0 +1,230 @@
+#include "engine/search/normal_search.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include "engine/search/patch_score.h"
+#include "mesh/closed_surface.h"
+#include "mesh/surface_validity.h"
+#include "visibility/embree_scene.h"
+
+namespace facets {
+namespace {
+
+struct Candidate {
+  Eigen::Vector3d move = Eigen::Vector3d::Zero();
+  double offset = 0.0;  // along the winning direction (the normal unless corner)
+  bool peak = false;
+  bool corner = false;  // won by a corner hypothesis
+};
+
+// Whether the image holds every sample the search can ask of it: the patch at both ends
+// of the range and where the vertex is. An image that sees a vertex near its frame would
+// otherwise spoil every offset's score.
+bool HoldsSearchBox(const LevelImage& image, const Eigen::Vector3d& p, const Eigen::Vector3d& normal,
+                    double range, double patch_radius) {
+  for (double offset : {-range, 0.0, range}) {
+    if (!ImageHoldsPatch(image, p + offset * normal, normal, patch_radius)) return false;
+  }
+  return true;
+}
+
+// The scores of offsets along one direction, the patch in the plane normal to it.
+struct Scan {
+  double here = -std::numeric_limits<double>::infinity();  // at offset 0
+  double best = -std::numeric_limits<double>::infinity();  // at the peak (when peak)
+  double offset = 0.0;  // of the peak along the direction (m)
+  bool peak = false;    // an interior maximum of at least min_score
+};
+
+Scan ScanAlong(const Eigen::Vector3d& p, const Eigen::Vector3d& direction, const std::vector<const LevelImage*>& images,
+               double ground_pixel, const NormalSearchOptions& options) {
+  Scan result;
+  const std::vector<Eigen::Vector3d> patch =
+      PatchOffsets(direction, options.patch_half, options.sample_pixels * ground_pixel);
+  const int steps = static_cast<int>(std::floor(options.range_pixels / options.step_pixels));
+  const double step = options.step_pixels * ground_pixel;
+  PatchScorer search(images, options.min_contrast, options.min_images);
+  std::vector<double> score(2 * steps + 1);
+  std::vector<Eigen::Vector3d> samples(patch.size());
+  for (int k = -steps; k <= steps; ++k) {
+    const Eigen::Vector3d centre = p + k * step * direction;
+    for (size_t s = 0; s < patch.size(); ++s) samples[s] = centre + patch[s];
+    score[k + steps] = search.Score(samples);
+  }
+  result.here = score[steps];
+  const int best = static_cast<int>(std::max_element(score.begin(), score.end()) - score.begin());
+  // A peak at the end of the range may lie beyond it: not taken.
+  if (best == 0 || best == 2 * steps || best == steps) return result;
+  if (!(score[best] >= options.min_score)) return result;
+  // Parabola through the peak and its neighbours for the sub-step offset.
+  const double a = score[best - 1], b = score[best], c = score[best + 1];
+  double frac = 0.0;
+  if (std::isfinite(a) && std::isfinite(c) && a - 2 * b + c < 0) frac = 0.5 * (a - c) / (a - 2 * b + c);
+  result.offset = (best - steps + std::clamp(frac, -0.5, 0.5)) * step;
+  result.best = score[best];
+  result.peak = true;
+  return result;
+}
+
+// A direction to move along (the patch lies in the plane normal to it).
+struct Hypothesis {
+  Eigen::Vector3d direction;
+  bool corner = false;
+};
+
+}  // namespace
+
+NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImage>& images,
+                                      double ground_pixel, const NormalSearchOptions& options) {
+  NormalSearchReport report;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<Eigen::Vector3i> triangles;
+  TinPointsAndTriangles(*mesh, &points, &triangles);
+  if (triangles.empty() || images.empty()) return report;
+  const TriangleScene scene(EmbreeDevice::Shared(), points, triangles);
+  const double range = options.range_pixels * ground_pixel;
+  // Rays blocked no closer than this to the vertex count as seeing it: the surface
+  // around a vertex that is off by up to the range may stand in its own way.
+  const double patch_radius = options.patch_half * options.sample_pixels * ground_pixel;
+  const double tolerance = range + patch_radius;
+  std::vector<Eigen::Vector3d> centres;
+  for (const LevelImage& image : images) centres.push_back(image.cam_from_world.Inverse().translation);
+  const double max_cos_to_views = std::cos(options.min_angle_to_views_deg * M_PI / 180.0);
+  const double ramp_max_z = std::cos(options.corner_min_deg * M_PI / 180.0);
+  const double ramp_min_z = std::cos(options.corner_max_deg * M_PI / 180.0);
+  const size_t n = points.size();
+  std::vector<Candidate> candidates(n);
+  std::vector<char> searched(n, 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 64), [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<size_t> visible;  // images whose ray to the vertex is free
+    std::vector<const LevelImage*> seeing;
+    for (size_t v = r.begin(); v != r.end(); ++v) {
+      const auto vh = mesh->vertex_handle(static_cast<int>(v));
+      if (mesh->is_boundary(vh)) continue;
+      const Eigen::Vector3d& p = points[v];
+      const Eigen::Vector3d normal = ToEigen(mesh->normal(vh));
+      // The images that see a plane through the vertex with this normal and hold the
+      // search box along `direction`.
+      auto images_seeing = [&](const Eigen::Vector3d& direction) {
+        seeing.clear();
+        for (size_t k : visible) {
+          const Eigen::Vector3d d = p - centres[k];
+          if (-direction.dot(d) < options.min_cos * d.norm()) continue;
+          if (!HoldsSearchBox(images[k], p, direction, range, patch_radius)) continue;
+          seeing.push_back(&images[k]);
+        }
+        return static_cast<int>(seeing.size()) >= options.min_images;
+      };
+      visible.clear();
+      for (size_t k = 0; k < images.size(); ++k) {
+        const Eigen::Vector3d d = p - centres[k];
+        const double length = d.norm();
+        if (!(length > tolerance)) continue;
+        const RayHit hit = scene.Intersect(centres[k], d, 0.0f, static_cast<float>(1.0 - tolerance / length));
+        if (!hit.hit) visible.push_back(k);
+      }
+      // Which hypotheses the vertex tries: its normal when it is steep to its images
+      // (a wall), the corner ones when it lies on a ramp.
+      std::vector<Hypothesis> hypotheses;
+      const bool normal_seen = images_seeing(normal);
+      const std::vector<const LevelImage*> seeing_normal = seeing;  // corner hypotheses reuse `seeing`
+      if (normal_seen) {
+        bool steep = true;
+        if (options.min_angle_to_views_deg > 0.0) {
+          Eigen::Vector3d towards = Eigen::Vector3d::Zero();
+          for (const LevelImage* image : seeing_normal) towards += (centres[image - images.data()] - p).normalized();
+          steep = towards.normalized().dot(normal) <= max_cos_to_views;
+        }
+        if (steep) hypotheses.push_back({normal, false});
+      }
+      const double nz = std::abs(normal.z());
+      const Eigen::Vector3d horizontal(normal.x(), normal.y(), 0.0);
+      if (options.corners && nz <= ramp_max_z && nz >= ramp_min_z && horizontal.norm() > 0.0) {
+        hypotheses.push_back({horizontal.normalized(), true});
+        hypotheses.push_back({Eigen::Vector3d(0.0, 0.0, normal.z() >= 0.0 ? 1.0 : -1.0), true});
+      }
+      if (hypotheses.empty()) continue;
+      // The score where the vertex is, with the patch in its own tangent plane: what a
+      // peak must beat by min_gain (the scan along the normal gives it).
+      searched[v] = 1;
+      Scan along_normal;
+      if (normal_seen) along_normal = ScanAlong(p, normal, seeing_normal, ground_pixel, options);
+      const double here = along_normal.here;
+      if (std::isfinite(here) && here >= options.max_score_here) continue;
+      Candidate best;
+      double best_score = -std::numeric_limits<double>::infinity();
+      for (const Hypothesis& hypothesis : hypotheses) {
+        Scan scan = along_normal;
+        if (hypothesis.corner) {
+          if (!images_seeing(hypothesis.direction)) continue;
+          scan = ScanAlong(p, hypothesis.direction, seeing, ground_pixel, options);
+        }
+        if (!scan.peak || scan.best <= best_score) continue;
+        if (std::isfinite(here) && scan.best - here < options.min_gain) continue;
+        best_score = scan.best;
+        best.move = scan.offset * hypothesis.direction;
+        best.offset = scan.offset;
+        best.peak = true;
+        best.corner = hypothesis.corner;
+      }
+      candidates[v] = best;
+    }
+  });
+  // Median of the candidate moves over the vertex and its neighbours that face the same
+  // way (no peak counts as no move): a lone false peak is outvoted. Offsets along the
+  // normals when every move is along a normal; component-wise over the move vectors
+  // with the corner hypotheses (ramp neighbours that disagree, one to the wall and one
+  // to the ground, cancel).
+  std::vector<Eigen::Vector3d> moves(n, Eigen::Vector3d::Zero());
+  for (size_t v = 0; v < n; ++v) {
+    report.searched += searched[v];
+    report.peaks += candidates[v].peak;
+    report.corner_peaks += candidates[v].corner;
+    if (!candidates[v].peak) continue;
+    const auto vh = mesh->vertex_handle(static_cast<int>(v));
+    const Eigen::Vector3d normal = ToEigen(mesh->normal(vh));
+    std::vector<const Candidate*> around = {&candidates[v]};
+    int support = 0;
+    for (auto vv : mesh->vv_range(vh)) {
+      if (ToEigen(mesh->normal(vv)).dot(normal) < options.neighbour_cos) continue;
+      const Candidate& other = candidates[vv.idx()];
+      around.push_back(searched[vv.idx()] ? &other : &candidates[v]);
+      support += other.peak && (other.move - candidates[v].move).norm() <=
+                                   options.support_steps * options.step_pixels * ground_pixel;
+    }
+    if (options.support_filter) {
+      if (support > 0) moves[v] = candidates[v].move;
+      continue;
+    }
+    const size_t middle = around.size() / 2;
+    std::vector<double> values;
+    if (!options.corners) {
+      for (const Candidate* c : around) values.push_back(c->offset);
+      std::nth_element(values.begin(), values.begin() + middle, values.end());
+      moves[v] = values[middle] * normal;
+      continue;
+    }
+    for (int c = 0; c < 3; ++c) {
+      values.clear();
+      for (const Candidate* m : around) values.push_back(m->move[c]);
+      std::nth_element(values.begin(), values.begin() + middle, values.end());
+      moves[v][c] = values[middle];
+    }
+  }
+  const std::vector<Eigen::Vector3d> before = points;
+  const double least = 0.1 * options.step_pixels * ground_pixel;
+  for (size_t v = 0; v < n; ++v) {
+    if (moves[v].norm() < least) continue;
+    mesh->set_point(mesh->vertex_handle(static_cast<int>(v)), ToOpenMesh(points[v] + moves[v]));
+  }
+  CopyStepFields(GuardAndMeasureStep(mesh, before, least), &report);
+  return report;
+}
+
+}  // namespace facets
