@@ -1,0 +1,161 @@
+#include "engine/pipeline/scene_preset.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+namespace facets {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+double Quantile(std::vector<double> v, double q) {
+  std::sort(v.begin(), v.end());
+  return v[static_cast<size_t>(std::clamp(q, 0.0, 1.0) * (v.size() - 1))];
+}
+
+// The cameras' mean up direction (minus their y axes) when it is at least half a unit
+// long (upright images), else +Z (nadir images flown in all directions cancel out).
+Eigen::Vector3d SceneUp(const ImageBlock& block) {
+  Eigen::Vector3d up = Eigen::Vector3d::Zero();
+  for (const auto& image : block.images) up -= image.cam_from_world.rotation.conjugate() * Eigen::Vector3d::UnitY();
+  up /= static_cast<double>(std::max<size_t>(1, block.images.size()));
+  return up.norm() >= 0.5 ? Eigen::Vector3d(up.normalized()) : Eigen::Vector3d::UnitZ();
+}
+
+// Centre of the tie points (per-axis medians), else of the projection centres' footprint.
+Eigen::Vector3d SceneCentre(const ImageBlock& block) {
+  if (block.points.size() < 10) {
+    if (block.roi) return 0.5 * (block.roi->min + block.roi->max);
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const auto& image : block.images) mean += image.ProjectionCentre();
+    return mean / static_cast<double>(std::max<size_t>(1, block.images.size()));
+  }
+  std::vector<double> x, y, z;
+  for (const auto& p : block.points) {
+    x.push_back(p.xyz.x());
+    y.push_back(p.xyz.y());
+    z.push_back(p.xyz.z());
+  }
+  return {Quantile(x, 0.5), Quantile(y, 0.5), Quantile(z, 0.5)};
+}
+
+// Spread of the tie points along up and across it (2nd to 98th percentile), m.
+std::pair<double, double> TiePointSpread(const ImageBlock& block, const Eigen::Vector3d& up) {
+  if (block.points.size() < 10) return {0.0, 0.0};
+  const Eigen::Vector3d across_u = up.unitOrthogonal(), across_v = up.cross(across_u);
+  std::vector<double> along, u, v;
+  for (const auto& p : block.points) {
+    along.push_back(p.xyz.dot(up));
+    u.push_back(p.xyz.dot(across_u));
+    v.push_back(p.xyz.dot(across_v));
+  }
+  const double vertical = Quantile(along, 0.98) - Quantile(along, 0.02);
+  const double horizontal = std::max(Quantile(u, 0.98) - Quantile(u, 0.02), Quantile(v, 0.98) - Quantile(v, 0.02));
+  return {vertical, horizontal};
+}
+
+// Largest gap between the cameras' azimuths about up, seen from the centre (deg).
+double LargestAzimuthGap(const ImageBlock& block, const Eigen::Vector3d& centre, const Eigen::Vector3d& up) {
+  const Eigen::Vector3d across_u = up.unitOrthogonal(), across_v = up.cross(across_u);
+  std::vector<double> azimuths;
+  for (const auto& image : block.images) {
+    const Eigen::Vector3d d = image.ProjectionCentre() - centre;
+    azimuths.push_back(std::atan2(d.dot(across_v), d.dot(across_u)) * 180.0 / kPi);
+  }
+  std::sort(azimuths.begin(), azimuths.end());
+  double gap = azimuths.front() + 360.0 - azimuths.back();
+  for (size_t k = 1; k < azimuths.size(); ++k) gap = std::max(gap, azimuths[k] - azimuths[k - 1]);
+  return gap;
+}
+
+// Median elevation of the cameras above the plane through the centre normal to up (deg).
+double MedianElevation(const ImageBlock& block, const Eigen::Vector3d& centre, const Eigen::Vector3d& up) {
+  std::vector<double> elevations;
+  for (const auto& image : block.images) {
+    const Eigen::Vector3d d = (image.ProjectionCentre() - centre).normalized();
+    elevations.push_back(std::asin(std::clamp(d.dot(up), -1.0, 1.0)) * 180.0 / kPi);
+  }
+  return Quantile(elevations, 0.5);
+}
+
+}  // namespace
+
+ScenePreset ParseScenePreset(const std::string& name) {
+  if (name == "auto") return ScenePreset::kAuto;
+  if (name == "aerial") return ScenePreset::kAerial;
+  if (name == "facade") return ScenePreset::kFacade;
+  if (name == "object") return ScenePreset::kObject;
+  throw std::invalid_argument("scene preset must be auto, aerial, facade or object, not '" + name + "'");
+}
+
+std::string ScenePresetName(ScenePreset preset) {
+  switch (preset) {
+    case ScenePreset::kAerial: return "aerial";
+    case ScenePreset::kFacade: return "facade";
+    case ScenePreset::kObject: return "object";
+    case ScenePreset::kAuto: break;
+  }
+  return "auto";
+}
+
+ScenePreset ChooseScenePreset(const ImageBlock& block, std::string* why) {
+  if (block.images.empty()) throw std::invalid_argument("choosing a scene preset: the block has no images");
+  const Eigen::Vector3d up = SceneUp(block);
+  const Eigen::Vector3d centre = SceneCentre(block);
+  const double elevation = MedianElevation(block, centre, up);
+  const double gap = LargestAzimuthGap(block, centre, up);
+  const auto [vertical, horizontal] = TiePointSpread(block, up);
+  const bool flat = horizontal > 0.0 ? vertical < 0.5 * horizontal : true;
+  ScenePreset preset = ScenePreset::kFacade;
+  if (elevation > 35.0 && flat) {
+    preset = ScenePreset::kAerial;
+  } else if (gap < 150.0) {
+    preset = ScenePreset::kObject;
+  }
+  if (why) {
+    std::ostringstream line;
+    line.precision(3);
+    line << "cameras " << elevation << " deg above the tie points' centre (median), largest azimuth gap " << gap
+         << " deg, tie points " << vertical << " m along up against " << horizontal << " m across";
+    *why = line.str();
+  }
+  return preset;
+}
+
+void ApplyScenePreset(ScenePreset preset, ReconstructionOptions* options) {
+  switch (preset) {
+    case ScenePreset::kAerial:
+      options->levels = 4;
+      options->facet_pixels = 1.5;
+      options->v_cycles = 1;
+      options->v_cycle_rounds_last_level = 0;
+      options->normal_search_tolerance = 1.0;
+      options->normal_search_local_rings = 1;
+      options->wall_corners = true;
+      options->wall_feet = true;
+      options->wall_eaves = true;
+      break;
+    case ScenePreset::kFacade:
+      options->start_plane = ReconstructionOptions::StartPlane::kFitted;
+      options->adjustment.radiometry = RadiometricModel::kLinear;
+      break;
+    case ScenePreset::kObject:
+      options->start_closed = true;
+      options->closed.shape = "visual-hull";
+      options->levels = 2;
+      options->adjustment.max_iterations = 4;
+      options->adjustment.robust_k = 2.0;
+      options->adjustment.reject_k = 5.0;
+      options->adjustment.silhouette_weight = 10000.0;
+      options->adjustment.silhouette_inside_px = 4.0;
+      options->closed.clamp_guard = true;
+      break;
+    case ScenePreset::kAuto:
+      break;
+  }
+}
+
+}  // namespace facets

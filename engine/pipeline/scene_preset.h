@@ -1,0 +1,39 @@
+// Scene presets: what a kind of scene needs set, named in one word. The user names one
+// (`--scene aerial|facade|object`) or the cameras and tie points choose it (auto).
+//   aerial  nadir and oblique images over a built-up area: walls stand up and are
+//           refined (search along normals in local rounds, a V-cycle, 1.5-pixel grey
+//           facets, vertical corners, feet and eaves laid onto their walls), 4 levels.
+//   facade  images from the street at one side of a facade: a start plane fitted to the
+//           tie points, no wall searches (the steep parts there are street and sky),
+//           linear radiometry per image.
+//   object  images all around a close-range object: a closed start carved from the
+//           silhouettes, robust weights, the silhouette term, the surface held inside
+//           the visual hull.
+// Options the user gives explicitly are set after the preset and win.
+#pragma once
+
+#include <string>
+
+#include "engine/pipeline/reconstruction.h"
+#include "io/image_block.h"
+
+namespace facets {
+
+enum class ScenePreset { kAuto, kAerial, kFacade, kObject };
+
+// "auto", "aerial", "facade", "object"; throws std::invalid_argument on anything else.
+ScenePreset ParseScenePreset(const std::string& name);
+std::string ScenePresetName(ScenePreset preset);
+
+// The preset the cameras and tie points point to, with the reason in one line (*why).
+// Up is the cameras' mean up direction where they agree on one (images taken upright),
+// else +Z. Aerial: the cameras stand more than 35 deg above the tie points' centre and
+// the tie points spread less than half as far along up as across it. Object: the
+// cameras surround the centre (no gap of 150 deg or more in their azimuths). Facade:
+// the rest (the cameras on one side).
+ScenePreset ChooseScenePreset(const ImageBlock& block, std::string* why);
+
+// Sets on *options what the preset means (kAuto: nothing).
+void ApplyScenePreset(ScenePreset preset, ReconstructionOptions* options);
+
+}  // namespace facets
