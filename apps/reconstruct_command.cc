@@ -87,7 +87,7 @@ struct ReconstructArgs {
   int window_faces = WindowPartitionOptions().max_faces;
   int window_margin = WindowPartitionOptions().margin_rings;
   int sweeps = LevelWindowOptions().sweeps;
-  int wall_passes = ReconstructionOptions().wall_passes;
+  int wall_passes = 0;
   int tangential_smoothing = ReconstructionOptions().tangential_smoothing;
   int straighten_rounds = ReconstructionOptions().straighten_rounds;
   int straighten_local_rings = ReconstructionOptions().straighten_local_rings;
@@ -202,6 +202,7 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.adjustment.correlated_residuals = args.sigma_model == "correlated";
   if (args.break_off) {
     options.adjustment.break_off = *args.break_off;
+    options.break_off_gsd = 0.0;
   } else {
     options.break_off_gsd = kDefaultBreakOffGsd;
   }
@@ -254,12 +255,10 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.windows.partition.max_faces = args.window_faces;
   options.windows.partition.margin_rings = args.window_margin;
   options.windows.sweeps = args.sweeps;
-  options.wall_passes = args.wall_passes;
   options.tangential_smoothing = args.tangential_smoothing;
   options.straighten_rounds = args.straighten_rounds;
   options.straighten_local_rings = args.straighten_local_rings;
   options.straighten_tolerance = args.straighten_tolerance;
-  options.straighten_by_kind = args.straighten_by_kind;
   if (args.normal_search_on) options.normal_search = true;
   if (args.normal_search_off) options.normal_search = false;
   options.normal_search_last_level = args.normal_search_last_level;
@@ -278,7 +277,6 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.v_cycle_level = args.v_cycle_level;
   options.v_cycle_robust_k = args.v_cycle_robust;
   options.normal_search_rounds = args.normal_search_rounds;
-  if (args.polish) options.polish_robust_k = *args.polish;
   options.normal_search_rounds_last_level = args.normal_search_rounds_last_level;
   options.normal_search_tolerance = args.normal_search_tolerance;
   options.normal_search_local_rings = args.normal_search_local_rings;

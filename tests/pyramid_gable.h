@@ -55,6 +55,7 @@ struct PyramidGable {
 // regularisation, plane start at the given height.
 inline ReconstructionOptions PyramidGableOptions(int levels, double start_height) {
   ReconstructionOptions options;
+  options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = levels;
   options.adjustment.regularisation = RegularisationFromName("adaptive");
   options.start_height = start_height;
