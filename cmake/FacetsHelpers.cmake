@@ -5,6 +5,9 @@
 #   project root.
 # facets_add_test(NAME SRCS a_test.cc DEPS x y)
 #   A GoogleTest executable registered with CTest (one CTest entry per test case).
+#   FACETS_SHARED_DATA_DIR: the real data sets beside the repository (../shared/data),
+#   overridden at run time by the environment variable FACETS_SHARED_DATA
+#   (io/shared_data_for_testing.h).
 
 function(facets_add_library name)
   cmake_parse_arguments(ARG "" "" "SRCS;DEPS" ${ARGN})
@@ -24,7 +27,7 @@ function(facets_add_test name)
   target_compile_options(${name} PRIVATE ${FACETS_WARNINGS})
   target_compile_definitions(${name} PRIVATE
     FACETS_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
-    FACETS_SHARED_DIR="${PROJECT_SOURCE_DIR}/../shared")
+    FACETS_SHARED_DATA_DIR="${PROJECT_SOURCE_DIR}/../shared/data")
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60
     PROPERTIES ENVIRONMENT "FACETS_SOURCE_DIR=${PROJECT_SOURCE_DIR}")
 endfunction()
