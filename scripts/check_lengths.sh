@@ -3,7 +3,7 @@
 # application folders (tests, *_test.cc, are left out), then one summary line:
 #   length check: N entries (limit 10), K functions over 150, M files over 800
 # Functions and their extents come from universal-ctags (a lambda counts where ctags
-# reports it: inside its function, or on its own as __anon...).
+# reports it: inside its function, and on its own as lambda-in-FUNCTION).
 # Exit status 0 (a report) unless --strict is given; with --strict, non-zero when the
 # list is longer than 10 entries, a function is over 150 lines or a file over 800.
 set -euo pipefail
@@ -29,13 +29,15 @@ functions=$(ctags --fields=+ne --c++-kinds=f -f - -R --languages=C++ "${DIRS[@]}
   awk -F'\t' -v limit="$FUNCTION_LINES" '
     $2 ~ /_test\.cc$/ { next }
     {
-      start = ""; end = ""
+      start = ""; end = ""; name = $1
       for (i = 4; i <= NF; ++i) {
         if ($i ~ /^line:/) start = substr($i, 6)
         if ($i ~ /^end:/) end = substr($i, 5)
+        # A lambda (ctags names it __anon...): named after the function around it.
+        if (name ~ /^__anon/ && $i ~ /^function:/) name = "lambda-in-" substr($i, 10)
       }
       if (start != "" && end != "" && end - start + 1 > limit)
-        printf "%d %s:%d %s\n", end - start + 1, $2, start, $1
+        printf "%d %s:%d %s\n", end - start + 1, $2, start, name
     }' | sort -k1,1nr -k2,2)
 
 files=$(find "${DIRS[@]}" -type f \( -name '*.cc' -o -name '*.h' \) ! -name '*_test.cc' -print0 |
