@@ -10,6 +10,7 @@
 
 #include "io/colmap_io.h"
 #include "io/image_io.h"
+#include "io/shared_data_for_testing.h"
 #include "tests/rendered_scene.h"
 
 namespace facets {
@@ -19,12 +20,6 @@ namespace fs = std::filesystem;
 
 std::string TempDir(const std::string& name) {
   return (fs::temp_directory_path() / ("facets_radiometry_" + name + "_" + std::to_string(getpid()))).string();
-}
-
-// The shared data sets: $FACETS_SHARED_DIR/data when set, else the build's default.
-std::string SharedData() {
-  const char* env = std::getenv("FACETS_SHARED_DIR");
-  return std::string(env ? env : FACETS_SHARED_DIR) + "/data/";
 }
 
 TEST(RadiometryChoice, NoObservationsGiveNone) {
@@ -73,11 +68,8 @@ TEST(RadiometryChoice, RealPhotographs) {
       {"middlebury_templeSparseRing", "sparse_with_points", RadiometricModel::kLinear},
   };
   for (const RealSet& set : sets) {
-    const std::string root = SharedData() + set.name;
-    if (!fs::exists(root + "/" + set.sparse)) {
-      std::printf("%s: not present, skipped\n", set.name);
-      continue;
-    }
+    FACETS_SKIP_WITHOUT_SHARED_DATA(std::string(set.name) + "/" + set.sparse);
+    const std::string root = SharedDataDir() + set.name;
     const ImageBlock block = ReadColmapModel(root + "/" + set.sparse, root + "/images");
     const RadiometryChoice choice = ChooseRadiometry(block);
     std::printf("%s: %s\n", set.name, choice.why.c_str());
