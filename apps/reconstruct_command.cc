@@ -136,9 +136,6 @@ struct ReconstructArgs {
   bool no_untangle = false;
   bool keep_crossing_facets = false;
   bool sector_regularisation = false;
-  double plumb_weight = AdjustmentOptions().plumb_weight;
-  double plumb_gate = AdjustmentOptions().plumb_gate_deg;
-  bool plumb_no_corner_gate = false;
   bool no_occluders = false;
   bool tiled_images = false;
   double image_memory_mb = 1024.0;
@@ -302,9 +299,6 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.untangle = !args.no_untangle;
   options.flatten_crossing_facets = !args.keep_crossing_facets;
   options.adjustment.sector_regularisation = args.sector_regularisation;
-  options.adjustment.plumb_weight = args.plumb_weight;
-  options.adjustment.plumb_gate_deg = args.plumb_gate;
-  options.adjustment.plumb_corner_gate = !args.plumb_no_corner_gate;
   options.windows.occluders = !args.no_occluders;
   // Level images in memory while they fit the budget, else tiled on disk and read per
   // window (pyramid: 4/3 of the finest kept level; float per channel).
@@ -665,18 +659,6 @@ void AddReconstructCommand(CLI::App& app) {
       ->capture_default_str();
   sub->add_flag("--sector-regularisation", args->sector_regularisation,
                 "crease vertices: curvature pseudo-observations per sector between the creases");
-  sub->add_option("--plumb-walls", args->plumb_weight,
-                  "prior for buildings: faces within --plumb-gate of vertical drawn towards vertical, with this "
-                  "weight per face in the units of --lambda (0 = off)")
-      ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
-  sub->add_option("--plumb-gate", args->plumb_gate,
-                  "--plumb-walls: faces standing within this many degrees of vertical (the prior fades out towards it)")
-      ->capture_default_str()
-      ->check(CLI::Range(1.0, 59.0));
-  sub->add_flag("--plumb-no-corner-gate", args->plumb_no_corner_gate,
-                "--plumb-walls: also faces with a corner whose normal is beyond the gate (faces across eaves and "
-                "feet: stands short walls up further, but pushed the block's walls outwards)");
   sub->add_flag("--no-relax-unseen", args->no_relax_unseen,
                 "leave vertices no image saw where the adjustment left them");
   sub->add_flag("--no-fold-lips", args->no_fold_lips,

@@ -295,7 +295,6 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
     s.downweighted += r.downweighted;
     s.silhouette += r.silhouette;
     s.silhouette_outside += r.silhouette_outside;
-    s.plumb += r.plumb;
     s.unknowns += r.unknowns;
     s.redundancy += r.redundancy;
     s.cg_iterations_total += r.cg_iterations_total;

@@ -95,19 +95,6 @@ struct AdjustmentOptions {
   // wall whose vertices crumpled into creases is still smoothed (issue 7).
   bool sector_regularisation = false;
 
-  // Plumb walls (issue 9, a prior for built-up areas): every face standing within
-  // plumb_gate_deg of vertical gets one pseudo-observation "its unit normal's z = 0"
-  // (the face stands plumb; an angle in radians for small tilts), tapered to nothing at
-  // the gate ((1 - (n_z / sin gate)^2)^2, so a face does not jump in and out of the prior
-  // between iterations). Roofs (pitch up to 70 degrees: 20 from vertical) and terrain are
-  // left alone below the gate; the images still decide where the wall stands, only its
-  // tilt is drawn towards vertical. Weight per face in the units of lambda (pixel
-  // observations of weight 1), scaled by the face's share of a vertex's pixels (half).
-  // 0 = off.
-  double plumb_weight = 0.0;
-  double plumb_gate_deg = 15.0;
-  bool plumb_corner_gate = true;  // the gate also on the face's corner normals
-
   // Rays at |cos incidence| below this are no observation.
   double min_cos_incidence = 0.1;
 

@@ -1,7 +1,5 @@
 #include "engine/solver/window_adjustment.h"
 
-#include "engine/solver/plumb.h"
-
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -15,7 +13,6 @@
 #include <unordered_map>
 
 #include "engine/solver/observation.h"
-#include "engine/solver/plumb.h"
 #include "mesh/creases.h"
 #include "mesh/sector_rings.h"
 #include "mesh/surface_validity.h"
@@ -638,49 +635,6 @@ double WindowAdjustment::AccumulateCurvature(Eigen::VectorXd* rhs, long long* co
   return lpl;
 }
 
-double WindowAdjustment::AccumulatePlumb(Eigen::VectorXd* rhs, long long* count) {
-  *count = 0;
-  if (options_.plumb_weight <= 0.0) return 0.0;
-  // A face has about half a vertex's pixels (see AdjustmentOptions::lambda).
-  constexpr double kPixelsPerFace = kSubTrianglesPerFace * 4;
-  const double weight = options_.plumb_weight * kPixelsPerFace;
-  const double sin_gate = std::sin(options_.plumb_gate_deg * M_PI / 180.0);
-  double lpl = 0.0;
-  for (const auto& corners : face_vertices_) {
-    if (vertex_unknown_[corners[0]] < 0 && vertex_unknown_[corners[1]] < 0 && vertex_unknown_[corners[2]] < 0)
-      continue;
-    Eigen::Vector3d x[3], gradient[3];
-    for (int k = 0; k < 3; ++k) x[k] = ToEigen(mesh_->point(mesh_->vertex_handle(corners[k])));
-    const double nz = FaceNormalZ(x, gradient);
-    if (gradient[0].isZero()) continue;  // no area
-    // The gate on the corners' normals too: a face that cuts across an eave or a foot
-    // (a corner normal half way between wall and roof) is meant to slope, and drawing
-    // it plumb pushed the block building's walls 5-9 cm outwards (session 39).
-    double steepest = std::abs(nz);
-    if (options_.plumb_corner_gate) {
-      for (int k = 0; k < 3; ++k)
-        steepest = std::max(steepest, std::abs(mesh_->normal(mesh_->vertex_handle(corners[k]))[2]));
-    }
-    const double t = steepest / sin_gate;
-    if (t >= 1.0) continue;
-    const double w = weight * (1.0 - t * t) * (1.0 - t * t);
-    std::pair<int, double> terms[3];
-    int num_terms = 0;
-    for (int k = 0; k < 3; ++k) {
-      const int v = corners[k];
-      if (vertex_unknown_[v] >= 0) terms[num_terms++] = {vertex_unknown_[v], Direction(v).dot(gradient[k])};
-    }
-    const double l = -nz;
-    for (int i = 0; i < num_terms; ++i) {
-      (*rhs)[terms[i].first] += w * terms[i].second * l;
-      for (int j = 0; j < num_terms; ++j) normal_.Add(terms[i].first, terms[j].first, w * terms[i].second * terms[j].second);
-    }
-    lpl += w * l * l;
-    ++*count;
-  }
-  return lpl;
-}
-
 double WindowAdjustment::AccumulateSilhouette(Eigen::VectorXd* rhs, long long* count, long long* outside) {
   *count = 0;
   *outside = 0;
@@ -835,10 +789,6 @@ WindowReport WindowAdjustment::Run() {
     long long count = 0, pseudo = 0;
     double lpl = Accumulate(casts, &rhs, &count);
     lpl += AccumulateCurvature(&rhs, &pseudo);
-    long long plumb = 0;
-    lpl += AccumulatePlumb(&rhs, &plumb);
-    pseudo += plumb;
-    it.plumb = plumb;
     long long silhouette_outside = 0;
     lpl += AccumulateSilhouette(&rhs, &it.silhouette, &silhouette_outside);
     it.silhouette_outside = silhouette_outside;
@@ -870,7 +820,6 @@ WindowReport WindowAdjustment::Run() {
     report.downweighted = downweighted_;
     report.silhouette = it.silhouette;
     report.silhouette_outside = it.silhouette_outside;
-    report.plumb = it.plumb;
     report.unknowns = determined;
     report.redundancy = redundancy;
 

@@ -55,7 +55,6 @@ struct IterationReport {
   // pixel outside the outline (on background).
   long long silhouette = 0;
   long long silhouette_outside = 0;
-  long long plumb = 0;  // faces with a plumb pseudo-observation (AdjustmentOptions::plumb_weight)
   double max_dn_interior = 0.0;  // object units
   double max_dn_border = 0.0;
   double max_dn_corner = 0.0;
@@ -87,7 +86,6 @@ struct WindowReport {
   long long downweighted = 0;
   long long silhouette = 0;  // rim observations (AdjustmentOptions::silhouette_weight), last iteration
   long long silhouette_outside = 0;  // of them more than a level pixel outside the outline
-  long long plumb = 0;  // faces with a plumb pseudo-observation (AdjustmentOptions::plumb_weight), last iteration
   int unknowns = 0;
   long long redundancy = 0;
   int cg_iterations_total = 0;
@@ -164,9 +162,6 @@ class WindowAdjustment {
   double Accumulate(const std::vector<std::vector<PixelObservation>>& casts,
                     Eigen::VectorXd* rhs, long long* count);
   double AccumulateCurvature(Eigen::VectorXd* rhs, long long* count);
-  // AdjustmentOptions::plumb_weight: "unit normal's z = 0" for the faces within the
-  // gate of vertical; *count: how many faces got one.
-  double AccumulatePlumb(Eigen::VectorXd* rhs, long long* count);
   // AdjustmentOptions::silhouette_weight: rim observations of the free vertices.
   double AccumulateSilhouette(Eigen::VectorXd* rhs, long long* count, long long* outside);
   // Adds the ridge to N's diagonal; returns the unknowns determined beyond it.
