@@ -135,7 +135,6 @@ struct ReconstructArgs {
   bool no_wall_merge = false;
   bool no_untangle = false;
   bool keep_crossing_facets = false;
-  bool sector_regularisation = false;
   bool no_occluders = false;
   bool tiled_images = false;
   double image_memory_mb = 1024.0;
@@ -298,7 +297,6 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.wall_merge_pieces = !args.no_wall_merge;
   options.untangle = !args.no_untangle;
   options.flatten_crossing_facets = !args.keep_crossing_facets;
-  options.adjustment.sector_regularisation = args.sector_regularisation;
   options.windows.occluders = !args.no_occluders;
   // Level images in memory while they fit the budget, else tiled on disk and read per
   // window (pyramid: 4/3 of the finest kept level; float per channel).
@@ -657,8 +655,6 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--displacement", args->displacement,
                   "normal (3D: walls stand up) | vertical (2.5D, for comparison)")
       ->capture_default_str();
-  sub->add_flag("--sector-regularisation", args->sector_regularisation,
-                "crease vertices: curvature pseudo-observations per sector between the creases");
   sub->add_flag("--no-relax-unseen", args->no_relax_unseen,
                 "leave vertices no image saw where the adjustment left them");
   sub->add_flag("--no-fold-lips", args->no_fold_lips,

@@ -90,10 +90,6 @@ struct AdjustmentOptions {
   // curvature regularisation keeps a ridge round until it is a crease. Off for closed
   // starts, whose coarse facets bend by 10-20 degrees everywhere.
   bool rounded_ridges = true;
-  // Crease vertices get no curvature pseudo-observation across the crease; with this
-  // they get one per sector ("flat on the roof side, flat on the wall side"), so a
-  // wall whose vertices crumpled into creases is still smoothed (issue 7).
-  bool sector_regularisation = false;
 
   // Rays at |cos incidence| below this are no observation.
   double min_cos_incidence = 0.1;

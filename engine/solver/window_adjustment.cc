@@ -14,7 +14,6 @@
 
 #include "engine/solver/observation.h"
 #include "mesh/creases.h"
-#include "mesh/sector_rings.h"
 #include "mesh/surface_validity.h"
 #include "visibility/image_selection.h"
 #include "visibility/occluder_selection.h"
@@ -611,10 +610,6 @@ double WindowAdjustment::AccumulateCurvature(Eigen::VectorXd* rhs, long long* co
     lpl += weight * l * l;
     ++*count;
   };
-  // AdjustmentOptions::sector_regularisation: a crease vertex is held flat within each
-  // sector (mesh/sector_rings.h) instead of not at all.
-  std::vector<std::vector<SectorRing>> sectors;
-  if (options_.sector_regularisation) sectors = CreaseSectorRings(*mesh_, ComputeCornerNormals(*mesh_, crease_edges_));
   for (size_t v = 0; v < vertex_ring_.size(); ++v) {
     const auto& ring = vertex_ring_[v];
     if (ring.empty()) continue;
@@ -622,12 +617,7 @@ double WindowAdjustment::AccumulateCurvature(Eigen::VectorXd* rhs, long long* co
     // min_views images see (a wall's foot behind a building, an eave seen once) has no
     // data to determine it and keeps its curvature pseudo-observation, else it is
     // held by nothing but the ridge and its sigma says it is arbitrary (issue 7).
-    if (crease_vertex_[v] && vertex_views_[v] >= options_.min_views) {
-      if (!sectors.empty()) {
-        for (const SectorRing& sector : sectors[v]) add(v, sector.normal, sector.ring, 0.0);
-      }
-      continue;
-    }
+    if (crease_vertex_[v] && vertex_views_[v] >= options_.min_views) continue;
     const double target =
         options_.regularisation == Regularisation::kAdaptive ? curvature_target_[v] : 0.0;
     add(v, ToEigen(mesh_->normal(mesh_->vertex_handle(static_cast<int>(v)))), ring, target);
