@@ -96,7 +96,6 @@ struct ReconstructArgs {
   bool normal_search_on = false, normal_search_off = false;
   int normal_search_last_level = ReconstructionOptions().normal_search_last_level;
   bool normal_search_support = false;
-  bool normal_search_corners = false;
   bool plane_propagation_on = false;
   bool plane_propagation_off = false;
   double start_step_cap = ReconstructionOptions().start_step_cap_pixels;
@@ -260,7 +259,6 @@ void RunReconstruct(const ReconstructArgs& args) {
   if (args.normal_search_off) options.normal_search = false;
   options.normal_search_last_level = args.normal_search_last_level;
   options.normal_search_options.support_filter = args.normal_search_support;
-  options.normal_search_options.corners = args.normal_search_corners;
   if (args.plane_propagation_on) options.plane_propagation = true;
   if (args.plane_propagation_off) options.plane_propagation = false;
   options.start_step_cap_pixels = args.start_step_cap;
@@ -564,9 +562,6 @@ void AddReconstructCommand(CLI::App& app) {
                   "least squares)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
-  sub->add_flag("--normal-search-corners", args->normal_search_corners,
-                "normal search: vertices on ramps (normal 20-70 deg from vertical: a rounded foot or eave) also try "
-                "a wall through them (moving horizontally) and a roof or ground (moving vertically)");
   sub->add_flag("--plane-propagation", args->plane_propagation_on,
                 "after each normal search: vertices try the planes of neighbours whose images agree there "
                 "(PatchMatch-like, a ring further per iteration; default: on wherever the normal search runs)");

@@ -257,7 +257,7 @@ std::string ReconstructionReport::Json() const {
     const NormalSearchReport& ns = level.normal_search;
     if (ns.searched > 0) {
       l["normal_search"] = {{"searched", ns.searched},         {"peaks", ns.peaks},
-                            {"corner_peaks", ns.corner_peaks}, {"moved", ns.moved},
+                            {"moved", ns.moved},
                             {"limited", ns.limited},           {"median_move", ns.median_move},
                             {"max_move", ns.max_move}};
     }
@@ -532,8 +532,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
   say("stage start: " + result.report.start_surface + (result.report.start_detail.empty() ? "" : ": " + result.report.start_detail));
   const bool normal_search = options.normal_search.value_or(!closed && !fitted);
   if (normal_search) {
-    say(std::string("normal search: steep vertices") +
-        (options.normal_search_options.corners ? " and ramps (corner hypotheses)" : "") + " before each finer level");
+    say(std::string("normal search: steep vertices") + " before each finer level");
   }
   // The passes: the descent coarsest..finest, then each V-cycle top..finest.
   std::vector<std::pair<int, int>> passes;  // (level, cycle)
@@ -619,7 +618,7 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
       const NormalSearchReport& ns = level_report.normal_search;
       say("  level " + std::to_string(level) + " normal search: " + std::to_string(ns.searched) +
           " vertices searched, " + std::to_string(ns.peaks) + " peaks" +
-          (options.normal_search_options.corners ? " (" + std::to_string(ns.corner_peaks) + " at corners)" : "") + ", " + std::to_string(ns.moved) +
+          ", " + std::to_string(ns.moved) +
           " moved (median " + std::to_string(ns.median_move) + " m, max " + std::to_string(ns.max_move) +
           " m), " + std::to_string(ns.limited) + " limited by the fold guard");
     }

@@ -18,9 +18,8 @@ namespace {
 
 struct Candidate {
   Eigen::Vector3d move = Eigen::Vector3d::Zero();
-  double offset = 0.0;  // along the winning direction (the normal unless corner)
+  double offset = 0.0;  // along the normal (m)
   bool peak = false;
-  bool corner = false;  // won by a corner hypothesis
 };
 
 // Whether the image holds every sample the search can ask of it: the patch at both ends
@@ -72,12 +71,6 @@ Scan ScanAlong(const Eigen::Vector3d& p, const Eigen::Vector3d& direction, const
   return result;
 }
 
-// A direction to move along (the patch lies in the plane normal to it).
-struct Hypothesis {
-  Eigen::Vector3d direction;
-  bool corner = false;
-};
-
 }  // namespace
 
 NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImage>& images,
@@ -96,8 +89,6 @@ NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImag
   std::vector<Eigen::Vector3d> centres;
   for (const LevelImage& image : images) centres.push_back(image.cam_from_world.Inverse().translation);
   const double max_cos_to_views = std::cos(options.min_angle_to_views_deg * M_PI / 180.0);
-  const double ramp_max_z = std::cos(options.corner_min_deg * M_PI / 180.0);
-  const double ramp_min_z = std::cos(options.corner_max_deg * M_PI / 180.0);
   const size_t n = points.size();
   std::vector<Candidate> candidates(n);
   std::vector<char> searched(n, 0);
@@ -129,63 +120,33 @@ NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImag
         const RayHit hit = scene.Intersect(centres[k], d, 0.0f, static_cast<float>(1.0 - tolerance / length));
         if (!hit.hit) visible.push_back(k);
       }
-      // Which hypotheses the vertex tries: its normal when it is steep to its images
-      // (a wall), the corner ones when it lies on a ramp.
-      std::vector<Hypothesis> hypotheses;
-      const bool normal_seen = images_seeing(normal);
-      const std::vector<const LevelImage*> seeing_normal = seeing;  // corner hypotheses reuse `seeing`
-      if (normal_seen) {
-        bool steep = true;
-        if (options.min_angle_to_views_deg > 0.0) {
-          Eigen::Vector3d towards = Eigen::Vector3d::Zero();
-          for (const LevelImage* image : seeing_normal) towards += (centres[image - images.data()] - p).normalized();
-          steep = towards.normalized().dot(normal) <= max_cos_to_views;
-        }
-        if (steep) hypotheses.push_back({normal, false});
+      // Only a vertex steep to its images (a wall) is searched.
+      if (!images_seeing(normal)) continue;
+      if (options.min_angle_to_views_deg > 0.0) {
+        Eigen::Vector3d towards = Eigen::Vector3d::Zero();
+        for (const LevelImage* image : seeing) towards += (centres[image - images.data()] - p).normalized();
+        const bool steep = towards.normalized().dot(normal) <= max_cos_to_views;
+        if (!steep) continue;
       }
-      const double nz = std::abs(normal.z());
-      const Eigen::Vector3d horizontal(normal.x(), normal.y(), 0.0);
-      if (options.corners && nz <= ramp_max_z && nz >= ramp_min_z && horizontal.norm() > 0.0) {
-        hypotheses.push_back({horizontal.normalized(), true});
-        hypotheses.push_back({Eigen::Vector3d(0.0, 0.0, normal.z() >= 0.0 ? 1.0 : -1.0), true});
-      }
-      if (hypotheses.empty()) continue;
-      // The score where the vertex is, with the patch in its own tangent plane: what a
-      // peak must beat by min_gain (the scan along the normal gives it).
       searched[v] = 1;
-      Scan along_normal;
-      if (normal_seen) along_normal = ScanAlong(p, normal, seeing_normal, ground_pixel, options);
-      const double here = along_normal.here;
+      // The score where the vertex is (offset 0, the patch in its own tangent plane) is
+      // what a peak must beat by min_gain.
+      const Scan scan = ScanAlong(p, normal, seeing, ground_pixel, options);
+      const double here = scan.here;
       if (std::isfinite(here) && here >= options.max_score_here) continue;
-      Candidate best;
-      double best_score = -std::numeric_limits<double>::infinity();
-      for (const Hypothesis& hypothesis : hypotheses) {
-        Scan scan = along_normal;
-        if (hypothesis.corner) {
-          if (!images_seeing(hypothesis.direction)) continue;
-          scan = ScanAlong(p, hypothesis.direction, seeing, ground_pixel, options);
-        }
-        if (!scan.peak || scan.best <= best_score) continue;
-        if (std::isfinite(here) && scan.best - here < options.min_gain) continue;
-        best_score = scan.best;
-        best.move = scan.offset * hypothesis.direction;
-        best.offset = scan.offset;
-        best.peak = true;
-        best.corner = hypothesis.corner;
-      }
-      candidates[v] = best;
+      if (!scan.peak) continue;
+      if (std::isfinite(here) && scan.best - here < options.min_gain) continue;
+      candidates[v].move = scan.offset * normal;
+      candidates[v].offset = scan.offset;
+      candidates[v].peak = true;
     }
   });
   // Median of the candidate moves over the vertex and its neighbours that face the same
-  // way (no peak counts as no move): a lone false peak is outvoted. Offsets along the
-  // normals when every move is along a normal; component-wise over the move vectors
-  // with the corner hypotheses (ramp neighbours that disagree, one to the wall and one
-  // to the ground, cancel).
+  // way (no peak counts as no move): a lone false peak is outvoted.
   std::vector<Eigen::Vector3d> moves(n, Eigen::Vector3d::Zero());
   for (size_t v = 0; v < n; ++v) {
     report.searched += searched[v];
     report.peaks += candidates[v].peak;
-    report.corner_peaks += candidates[v].corner;
     if (!candidates[v].peak) continue;
     const auto vh = mesh->vertex_handle(static_cast<int>(v));
     const Eigen::Vector3d normal = ToEigen(mesh->normal(vh));
@@ -204,18 +165,9 @@ NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImag
     }
     const size_t middle = around.size() / 2;
     std::vector<double> values;
-    if (!options.corners) {
-      for (const Candidate* c : around) values.push_back(c->offset);
-      std::nth_element(values.begin(), values.begin() + middle, values.end());
-      moves[v] = values[middle] * normal;
-      continue;
-    }
-    for (int c = 0; c < 3; ++c) {
-      values.clear();
-      for (const Candidate* m : around) values.push_back(m->move[c]);
-      std::nth_element(values.begin(), values.begin() + middle, values.end());
-      moves[v][c] = values[middle];
-    }
+    for (const Candidate* c : around) values.push_back(c->offset);
+    std::nth_element(values.begin(), values.begin() + middle, values.end());
+    moves[v] = values[middle] * normal;
   }
   const std::vector<Eigen::Vector3d> before = points;
   const double least = 0.1 * options.step_pixels * ground_pixel;

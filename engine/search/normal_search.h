@@ -43,22 +43,12 @@ struct NormalSearchOptions {
   // neighbour has a peak within support_steps offset steps of it.
   bool support_filter = false;
   double support_steps = 3.0;
-  // Corner hypotheses (issue 7): a coarse level leaves the foot of a wall as a ramp from
-  // the ground up the wall, and an eave as a ramp from the roof down it (normals 20-70
-  // deg from vertical); a search along such a normal looks for a plane at 45 deg that is
-  // not there. With this on, ramp vertices also try a wall through them (moves along the
-  // normal's horizontal part, patch vertical) and a roof or ground through them (moves
-  // along the vertical, patch horizontal); the best of the three peaks wins.
-  bool corners = false;
-  double corner_min_deg = 20.0;  // ramp: normal this far from vertical or more
-  double corner_max_deg = 70.0;  // and at most this far
 };
 
 struct NormalSearchReport {
   int searched = 0;  // vertices with >= min_images images
   int peaks = 0;     // of them with an accepted peak off zero
   int moved = 0;     // moved after the median filter (|move| >= a tenth of a step)
-  int corner_peaks = 0;  // peaks won by a corner hypothesis (NormalSearchOptions::corners)
   int limited = 0;   // moves the fold guard halved or undid
   double median_move = 0.0;  // |move| of the moved vertices (m)
   double max_move = 0.0;
