@@ -95,7 +95,6 @@ struct ReconstructArgs {
   bool straighten_by_kind = false;
   bool normal_search_on = false, normal_search_off = false;
   int normal_search_last_level = ReconstructionOptions().normal_search_last_level;
-  bool normal_search_support = false;
   bool plane_propagation_on = false;
   bool plane_propagation_off = false;
   double start_step_cap = ReconstructionOptions().start_step_cap_pixels;
@@ -258,7 +257,6 @@ void RunReconstruct(const ReconstructArgs& args) {
   if (args.normal_search_on) options.normal_search = true;
   if (args.normal_search_off) options.normal_search = false;
   options.normal_search_last_level = args.normal_search_last_level;
-  options.normal_search_options.support_filter = args.normal_search_support;
   if (args.plane_propagation_on) options.plane_propagation = true;
   if (args.plane_propagation_off) options.plane_propagation = false;
   options.start_step_cap_pixels = args.start_step_cap;
@@ -542,8 +540,6 @@ void AddReconstructCommand(CLI::App& app) {
                   "normal search: finest pyramid level searched")
       ->capture_default_str()
       ->check(CLI::Range(0, 20));
-  sub->add_flag("--normal-search-support", args->normal_search_support,
-                "normal search: keep a peak that a neighbour's peak supports (instead of the median)");
   sub->add_option("--v-cycles", args->v_cycles,
                   "after the finest level: go back up to --v-cycle-level (its TIN put onto the finished surface) "
                   "and adjust down again, this often (0 = off; each costs those levels again)")

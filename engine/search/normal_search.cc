@@ -17,7 +17,6 @@ namespace facets {
 namespace {
 
 struct Candidate {
-  Eigen::Vector3d move = Eigen::Vector3d::Zero();
   double offset = 0.0;  // along the normal (m)
   bool peak = false;
 };
@@ -136,7 +135,6 @@ NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImag
       if (std::isfinite(here) && here >= options.max_score_here) continue;
       if (!scan.peak) continue;
       if (std::isfinite(here) && scan.best - here < options.min_gain) continue;
-      candidates[v].move = scan.offset * normal;
       candidates[v].offset = scan.offset;
       candidates[v].peak = true;
     }
@@ -151,17 +149,9 @@ NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImag
     const auto vh = mesh->vertex_handle(static_cast<int>(v));
     const Eigen::Vector3d normal = ToEigen(mesh->normal(vh));
     std::vector<const Candidate*> around = {&candidates[v]};
-    int support = 0;
     for (auto vv : mesh->vv_range(vh)) {
       if (ToEigen(mesh->normal(vv)).dot(normal) < options.neighbour_cos) continue;
-      const Candidate& other = candidates[vv.idx()];
-      around.push_back(searched[vv.idx()] ? &other : &candidates[v]);
-      support += other.peak && (other.move - candidates[v].move).norm() <=
-                                   options.support_steps * options.step_pixels * ground_pixel;
-    }
-    if (options.support_filter) {
-      if (support > 0) moves[v] = candidates[v].move;
-      continue;
+      around.push_back(searched[vv.idx()] ? &candidates[vv.idx()] : &candidates[v]);
     }
     const size_t middle = around.size() / 2;
     std::vector<double> values;

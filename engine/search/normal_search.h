@@ -38,11 +38,6 @@ struct NormalSearchOptions {
   // on the seed table 3 of 28 runs then miss, docs/EXPERIMENTS.md).
   double min_angle_to_views_deg = 45.0;
   double neighbour_cos = 0.8;  // neighbours that vote face within ~37 deg
-  // Filter of the peaks: false = median over the vertex and its neighbours that face the
-  // same way (no peak counts as no move); true = a peak is kept when at least one such
-  // neighbour has a peak within support_steps offset steps of it.
-  bool support_filter = false;
-  double support_steps = 3.0;
 };
 
 struct NormalSearchReport {
