@@ -116,7 +116,6 @@ struct ReconstructArgs {
   // Every option as given or defaulted, in the form --config reads (settings.ini).
   std::string settings;
   double normal_search_min_cos = NormalSearchOptions().min_cos;
-  double normal_search_max_here = NormalSearchOptions().max_score_here;
   double normal_search_min_angle = NormalSearchOptions().min_angle_to_views_deg;
   double normal_search_range = NormalSearchOptions().range_pixels;
   double normal_search_min_score = NormalSearchOptions().min_score;
@@ -276,7 +275,6 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.normal_search_local_rings = args.normal_search_local_rings;
   options.v_cycle_rounds_last_level = args.v_cycle_rounds_last_level;
   options.normal_search_options.min_cos = args.normal_search_min_cos;
-  options.normal_search_options.max_score_here = args.normal_search_max_here;
   options.normal_search_options.min_angle_to_views_deg = args.normal_search_min_angle;
   options.normal_search_options.range_pixels = args.normal_search_range;
   options.normal_search_options.min_score = args.normal_search_min_score;
@@ -608,10 +606,6 @@ void AddReconstructCommand(CLI::App& app) {
                   "normal search: an image is used where it sees the vertex's tangent plane at |cos| >= this")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
-  sub->add_option("--normal-search-max-here", args->normal_search_max_here,
-                  "normal search: vertices whose images already correlate this well where they are stay")
-      ->capture_default_str()
-      ->check(CLI::Range(-1.0, 1.0));
   sub->add_option("--normal-search-rounds-last-level", args->normal_search_rounds_last_level,
                   "normal search: finest pyramid level with rounds")
       ->capture_default_str()

@@ -132,7 +132,6 @@ NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImag
       // what a peak must beat by min_gain.
       const Scan scan = ScanAlong(p, normal, seeing, ground_pixel, options);
       const double here = scan.here;
-      if (std::isfinite(here) && here >= options.max_score_here) continue;
       if (!scan.peak) continue;
       if (std::isfinite(here) && scan.best - here < options.min_gain) continue;
       candidates[v].offset = scan.offset;

@@ -30,9 +30,6 @@ struct NormalSearchOptions {
   // 56.1 % but the roof at 0.202 GSD against 0.146; docs/EXPERIMENTS.md, session 9).
   double min_score = 0.4;
   double min_gain = 0.1;      // over the score where the vertex is
-  // Vertices whose images already agree where they are (score >= this) stay: a search
-  // there can only find a look-alike.
-  double max_score_here = 1.0;
   // Only vertices whose normal turns more than this from the mean direction to the images
   // that see them (walls of an aerial block, not its roofs and ground; 0 = every vertex:
   // on the seed table 3 of 28 runs then miss, docs/EXPERIMENTS.md).
