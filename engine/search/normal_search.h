@@ -1,14 +1,13 @@
-// Search along the vertex normals between pyramid levels (issue 7): a coarse level that
-// put a wall or an eave 1-2.5 m off leaves it 4-10 pixels off on the next level, beyond
-// the pull-in of least-squares matching (docs/EXPERIMENTS.md, session 8). Before such a
-// level is adjusted, every vertex tries offsets along its normal over a range of level
-// pixels: a small patch in its tangent plane is projected into the images that see it
-// and scored by the mean pairwise normalised cross-correlation of their grey values
-// (object lifting of seed 001, done per vertex and along the normal). Vertices with a
-// clear, better peak move there; the moves are median-filtered over neighbours facing
-// the same way (a single false match does not survive), and steps that fold the surface
-// are halved or undone (mesh/surface_validity.h). The adjustment then starts within its
-// pull-in.
+// Search along the vertex normals between pyramid levels: a coarse level that put a wall
+// or an eave 1-2.5 m off leaves it 4-10 pixels off on the next level, beyond the pull-in
+// of least-squares matching. Before such a level is adjusted, every vertex tries offsets
+// along its normal over a range of level pixels: a small patch in its tangent plane is
+// projected into the images that see it and scored by the mean pairwise normalised
+// cross-correlation of their grey values (object lifting of seed 001, done per vertex
+// and along the normal). Vertices with a clear, better peak move there; the moves are
+// median-filtered over neighbours facing the same way (a single false match does not
+// survive), and steps that fold the surface are halved or undone
+// (mesh/surface_validity.h). The adjustment then starts within its pull-in.
 #pragma once
 
 #include <vector>
@@ -26,13 +25,14 @@ struct NormalSearchOptions {
   double min_cos = 0.2;       // an image sees the vertex's plane at |cos| >= this
   int min_images = 2;
   double min_contrast = 2.0;  // grey-value standard deviation of a patch in an image
-  // Mean pairwise NCC of the best offset. 0.4: whole block walls 55.2 % (0.5: 48.5 %, 0.3:
-  // 56.1 % but the roof at 0.202 GSD against 0.146; docs/EXPERIMENTS.md, session 9).
+  // Least mean pairwise NCC of the best offset (-1..1): higher takes fewer walls back,
+  // lower takes false peaks on roofs (the block's roofs 0.20 GSD off at 0.3 against 0.15
+  // at 0.4).
   double min_score = 0.4;
   double min_gain = 0.1;      // over the score where the vertex is
   // Only vertices whose normal turns more than this from the mean direction to the images
-  // that see them (walls of an aerial block, not its roofs and ground; 0 = every vertex:
-  // on the seed table 3 of 28 runs then miss, docs/EXPERIMENTS.md).
+  // that see them, degrees (walls of an aerial block, not its roofs and ground; 0 = every
+  // vertex, which lets look-alike peaks move roofs and terrain).
   double min_angle_to_views_deg = 45.0;
   double neighbour_cos = 0.8;  // neighbours that vote face within ~37 deg
 };

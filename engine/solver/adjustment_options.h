@@ -30,7 +30,7 @@ RadiometricModel RadiometricModelFromName(const std::string& name);  // none|con
 std::string RegularisationName(Regularisation r);
 std::string RadiometricModelName(RadiometricModel m);
 
-// Direction in which the vertices move (issue 7): along their normals (3D: walls can
+// Direction in which the vertices move: along their normals (3D: walls can
 // stand up and overhang) or vertically only (a 2.5D height field, for comparison).
 enum class Displacement { kNormal, kVertical };
 Displacement DisplacementFromName(const std::string& name);  // normal|vertical
@@ -106,7 +106,7 @@ struct AdjustmentOptions {
   // rejected (no observation). 0 = off (each on its own).
   double robust_k = 0.0;
   double reject_k = 0.0;
-  // Silhouette term (objects before a dark background, issue 9): for every free vertex
+  // Silhouette term (objects before a dark background): for every free vertex
   // on a rim of an image that has a silhouette (LevelImage::silhouette), i.e. seen
   // edge-on (|normal . ray| <= silhouette_rim_cos) and not hidden, one observation
   // "signed distance of the vertex's projection to the image's foreground outline = 0",
