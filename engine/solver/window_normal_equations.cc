@@ -186,6 +186,24 @@ double WindowAdjustment::ReduceShares(const std::vector<Share>& shares, Eigen::V
   return lpl;
 }
 
+namespace {
+
+// The mean of a vertex's ring and the mean length of its edges to it (object units).
+void RingMean(const TinMesh& mesh, const Eigen::Vector3d& x, const std::vector<int>& ring, Eigen::Vector3d* mean,
+              double* h) {
+  *mean = Eigen::Vector3d::Zero();
+  *h = 0.0;
+  for (int j : ring) {
+    const Eigen::Vector3d xj = ToEigen(mesh.point(mesh.vertex_handle(j)));
+    *mean += xj;
+    *h += (xj - x).norm();
+  }
+  *mean /= ring.size();
+  *h /= ring.size();
+}
+
+}  // namespace
+
 std::vector<double> WindowAdjustment::CurrentCurvatures() const {
   std::vector<double> curvature(mesh_->n_vertices(), 0.0);
   for (size_t v = 0; v < vertex_ring_.size(); ++v) {
@@ -193,15 +211,9 @@ std::vector<double> WindowAdjustment::CurrentCurvatures() const {
     if (ring.empty()) continue;
     const Eigen::Vector3d x = ToEigen(mesh_->point(mesh_->vertex_handle(static_cast<int>(v))));
     const Eigen::Vector3d n = ToEigen(mesh_->normal(mesh_->vertex_handle(static_cast<int>(v))));
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    Eigen::Vector3d mean;
     double h = 0.0;
-    for (int j : ring) {
-      const Eigen::Vector3d xj = ToEigen(mesh_->point(mesh_->vertex_handle(j)));
-      mean += xj;
-      h += (xj - x).norm();
-    }
-    mean /= ring.size();
-    h /= ring.size();
+    RingMean(*mesh_, x, ring, &mean, &h);
     curvature[v] = n.dot(mean - x) / h;
   }
   return curvature;
@@ -214,33 +226,6 @@ double WindowAdjustment::AccumulateCurvature(Eigen::VectorXd* rhs, long long* co
   constexpr double kPixelsPerVertex = 2 * kSubTrianglesPerFace * 4;
   const double weight = options_.lambda * kPixelsPerVertex;
   double lpl = 0.0;
-  // One pseudo-observation "n . (mean of the ring - x) / h = target" for vertex v.
-  auto add = [&](size_t v, const Eigen::Vector3d& n, const std::vector<int>& ring, double target) {
-    const Eigen::Vector3d x = ToEigen(mesh_->point(mesh_->vertex_handle(static_cast<int>(v))));
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    double h = 0.0;
-    for (int j : ring) {
-      const Eigen::Vector3d xj = ToEigen(mesh_->point(mesh_->vertex_handle(j)));
-      mean += xj;
-      h += (xj - x).norm();
-    }
-    mean /= ring.size();
-    h /= ring.size();
-    std::vector<std::pair<int, double>> terms;
-    if (vertex_unknown_[v] >= 0) terms.emplace_back(vertex_unknown_[v], -n.dot(Direction(static_cast<int>(v))) / h);
-    for (int j : ring) {
-      if (vertex_unknown_[j] < 0) continue;
-      terms.emplace_back(vertex_unknown_[j], n.dot(Direction(j)) / (ring.size() * h));
-    }
-    if (terms.empty()) return;
-    const double l = target - n.dot(mean - x) / h;
-    for (const auto& [ui, ai] : terms) {
-      (*rhs)[ui] += weight * ai * l;
-      for (const auto& [uj, aj] : terms) normal_.Add(ui, uj, weight * ai * aj);
-    }
-    lpl += weight * l * l;
-    ++*count;
-  };
   for (size_t v = 0; v < vertex_ring_.size(); ++v) {
     const auto& ring = vertex_ring_[v];
     if (ring.empty()) continue;
@@ -251,7 +236,26 @@ double WindowAdjustment::AccumulateCurvature(Eigen::VectorXd* rhs, long long* co
     if (crease_vertex_[v] && vertex_views_[v] >= options_.min_views) continue;
     const double target =
         options_.regularisation == Regularisation::kAdaptive ? curvature_target_[v] : 0.0;
-    add(v, ToEigen(mesh_->normal(mesh_->vertex_handle(static_cast<int>(v)))), ring, target);
+    // One pseudo-observation "n . (mean of the ring - x) / h = target" for vertex v.
+    const Eigen::Vector3d n = ToEigen(mesh_->normal(mesh_->vertex_handle(static_cast<int>(v))));
+    const Eigen::Vector3d x = ToEigen(mesh_->point(mesh_->vertex_handle(static_cast<int>(v))));
+    Eigen::Vector3d mean;
+    double h = 0.0;
+    RingMean(*mesh_, x, ring, &mean, &h);
+    std::vector<std::pair<int, double>> terms;
+    if (vertex_unknown_[v] >= 0) terms.emplace_back(vertex_unknown_[v], -n.dot(Direction(static_cast<int>(v))) / h);
+    for (int j : ring) {
+      if (vertex_unknown_[j] < 0) continue;
+      terms.emplace_back(vertex_unknown_[j], n.dot(Direction(j)) / (ring.size() * h));
+    }
+    if (terms.empty()) continue;
+    const double l = target - n.dot(mean - x) / h;
+    for (const auto& [ui, ai] : terms) {
+      (*rhs)[ui] += weight * ai * l;
+      for (const auto& [uj, aj] : terms) normal_.Add(ui, uj, weight * ai * aj);
+    }
+    lpl += weight * l * l;
+    ++*count;
   }
   return lpl;
 }
