@@ -95,8 +95,6 @@ struct ReconstructArgs {
   bool straighten_by_kind = false;
   bool normal_search_on = false, normal_search_off = false;
   int normal_search_last_level = ReconstructionOptions().normal_search_last_level;
-  bool normal_search_support = false;
-  bool normal_search_corners = false;
   bool plane_propagation_on = false;
   bool plane_propagation_off = false;
   double start_step_cap = ReconstructionOptions().start_step_cap_pixels;
@@ -118,7 +116,6 @@ struct ReconstructArgs {
   // Every option as given or defaulted, in the form --config reads (settings.ini).
   std::string settings;
   double normal_search_min_cos = NormalSearchOptions().min_cos;
-  double normal_search_max_here = NormalSearchOptions().max_score_here;
   double normal_search_min_angle = NormalSearchOptions().min_angle_to_views_deg;
   double normal_search_range = NormalSearchOptions().range_pixels;
   double normal_search_min_score = NormalSearchOptions().min_score;
@@ -135,10 +132,6 @@ struct ReconstructArgs {
   bool no_wall_merge = false;
   bool no_untangle = false;
   bool keep_crossing_facets = false;
-  bool sector_regularisation = false;
-  double plumb_weight = AdjustmentOptions().plumb_weight;
-  double plumb_gate = AdjustmentOptions().plumb_gate_deg;
-  bool plumb_no_corner_gate = false;
   bool no_occluders = false;
   bool tiled_images = false;
   double image_memory_mb = 1024.0;
@@ -262,8 +255,6 @@ void RunReconstruct(const ReconstructArgs& args) {
   if (args.normal_search_on) options.normal_search = true;
   if (args.normal_search_off) options.normal_search = false;
   options.normal_search_last_level = args.normal_search_last_level;
-  options.normal_search_options.support_filter = args.normal_search_support;
-  options.normal_search_options.corners = args.normal_search_corners;
   if (args.plane_propagation_on) options.plane_propagation = true;
   if (args.plane_propagation_off) options.plane_propagation = false;
   options.start_step_cap_pixels = args.start_step_cap;
@@ -282,7 +273,6 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.normal_search_local_rings = args.normal_search_local_rings;
   options.v_cycle_rounds_last_level = args.v_cycle_rounds_last_level;
   options.normal_search_options.min_cos = args.normal_search_min_cos;
-  options.normal_search_options.max_score_here = args.normal_search_max_here;
   options.normal_search_options.min_angle_to_views_deg = args.normal_search_min_angle;
   options.normal_search_options.range_pixels = args.normal_search_range;
   options.normal_search_options.min_score = args.normal_search_min_score;
@@ -299,10 +289,6 @@ void RunReconstruct(const ReconstructArgs& args) {
   options.wall_merge_pieces = !args.no_wall_merge;
   options.untangle = !args.no_untangle;
   options.flatten_crossing_facets = !args.keep_crossing_facets;
-  options.adjustment.sector_regularisation = args.sector_regularisation;
-  options.adjustment.plumb_weight = args.plumb_weight;
-  options.adjustment.plumb_gate_deg = args.plumb_gate;
-  options.adjustment.plumb_corner_gate = !args.plumb_no_corner_gate;
   options.windows.occluders = !args.no_occluders;
   // Level images in memory while they fit the budget, else tiled on disk and read per
   // window (pyramid: 4/3 of the finest kept level; float per channel).
@@ -550,8 +536,6 @@ void AddReconstructCommand(CLI::App& app) {
                   "normal search: finest pyramid level searched")
       ->capture_default_str()
       ->check(CLI::Range(0, 20));
-  sub->add_flag("--normal-search-support", args->normal_search_support,
-                "normal search: keep a peak that a neighbour's peak supports (instead of the median)");
   sub->add_option("--v-cycles", args->v_cycles,
                   "after the finest level: go back up to --v-cycle-level (its TIN put onto the finished surface) "
                   "and adjust down again, this often (0 = off; each costs those levels again)")
@@ -570,9 +554,6 @@ void AddReconstructCommand(CLI::App& app) {
                   "least squares)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
-  sub->add_flag("--normal-search-corners", args->normal_search_corners,
-                "normal search: vertices on ramps (normal 20-70 deg from vertical: a rounded foot or eave) also try "
-                "a wall through them (moving horizontally) and a roof or ground (moving vertically)");
   sub->add_flag("--plane-propagation", args->plane_propagation_on,
                 "after each normal search: vertices try the planes of neighbours whose images agree there "
                 "(PatchMatch-like, a ring further per iteration; default: on wherever the normal search runs)");
@@ -623,10 +604,6 @@ void AddReconstructCommand(CLI::App& app) {
                   "normal search: an image is used where it sees the vertex's tangent plane at |cos| >= this")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
-  sub->add_option("--normal-search-max-here", args->normal_search_max_here,
-                  "normal search: vertices whose images already correlate this well where they are stay")
-      ->capture_default_str()
-      ->check(CLI::Range(-1.0, 1.0));
   sub->add_option("--normal-search-rounds-last-level", args->normal_search_rounds_last_level,
                   "normal search: finest pyramid level with rounds")
       ->capture_default_str()
@@ -661,20 +638,6 @@ void AddReconstructCommand(CLI::App& app) {
   sub->add_option("--displacement", args->displacement,
                   "normal (3D: walls stand up) | vertical (2.5D, for comparison)")
       ->capture_default_str();
-  sub->add_flag("--sector-regularisation", args->sector_regularisation,
-                "crease vertices: curvature pseudo-observations per sector between the creases");
-  sub->add_option("--plumb-walls", args->plumb_weight,
-                  "prior for buildings: faces within --plumb-gate of vertical drawn towards vertical, with this "
-                  "weight per face in the units of --lambda (0 = off)")
-      ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
-  sub->add_option("--plumb-gate", args->plumb_gate,
-                  "--plumb-walls: faces standing within this many degrees of vertical (the prior fades out towards it)")
-      ->capture_default_str()
-      ->check(CLI::Range(1.0, 59.0));
-  sub->add_flag("--plumb-no-corner-gate", args->plumb_no_corner_gate,
-                "--plumb-walls: also faces with a corner whose normal is beyond the gate (faces across eaves and "
-                "feet: stands short walls up further, but pushed the block's walls outwards)");
   sub->add_flag("--no-relax-unseen", args->no_relax_unseen,
                 "leave vertices no image saw where the adjustment left them");
   sub->add_flag("--no-fold-lips", args->no_fold_lips,

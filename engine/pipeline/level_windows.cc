@@ -91,6 +91,295 @@ Tessellation TessellateWithCreases(const TinMesh& mesh, const AdjustmentOptions&
   return Tessellate(mesh, BuildPatches(mesh, corners), corners);
 }
 
+// Occluders of a window: only the faces outside it that can stand between one of its
+// images and the (grown) window, as their own points.
+void CollectOccluders(const TinMesh& mesh, const MeshWindow& window, const Tessellation& snapshot,
+                      const std::vector<Eigen::AlignedBox3d>& face_boxes, const Eigen::AlignedBox3d& grown,
+                      const std::vector<LevelImage>& seeing, std::vector<Eigen::Vector3d>* occluder_points,
+                      std::vector<Eigen::Vector3i>* occluders) {
+  std::vector<OccluderView> views;
+  for (const LevelImage& image : seeing) views.push_back({image.camera, image.cam_from_world});
+  std::vector<char> in_window(mesh.n_faces(), 0);
+  for (int f : window.faces) in_window[f] = 1;
+  std::vector<int> point_index(snapshot.points.size(), -1);
+  for (int f : FacesThatCanHide(face_boxes, grown, views)) {
+    if (in_window[f]) continue;
+    for (int s = f * kSubTrianglesPerFace; s < (f + 1) * kSubTrianglesPerFace; ++s) {
+      Eigen::Vector3i tri;
+      for (int c = 0; c < 3; ++c) {
+        int& index = point_index[snapshot.triangles[s][c]];
+        if (index < 0) {
+          index = static_cast<int>(occluder_points->size());
+          occluder_points->push_back(snapshot.points[snapshot.triangles[s][c]]);
+        }
+        tri[c] = index;
+      }
+      occluders->push_back(tri);
+    }
+  }
+}
+
+// The per-vertex results of a window's last sweep re-indexed to its owned vertices
+// (MeshWindow order); a window without observations gives sigma 0, no views.
+void KeepOwnedVertexResults(const WindowMesh& wm, WindowResult* result) {
+  WindowReport& r = result->report;
+  std::vector<double> sigma;
+  std::vector<int> views;
+  std::vector<uint8_t> flags;
+  for (int local : wm.owned_local) {
+    sigma.push_back(result->observed ? r.vertex_sigma[local] : 0.0);
+    views.push_back(result->observed ? r.vertex_views[local] : 0);
+    flags.push_back(result->observed ? r.vertex_flags[local] : uint8_t{kVertexFewViews});
+  }
+  r.vertex_sigma = std::move(sigma);
+  r.vertex_views = std::move(views);
+  r.vertex_flags = std::move(flags);
+}
+
+// What the windows of one level run share.
+struct LevelRun {
+  TinMesh* mesh;
+  const WindowImages& images;
+  const AdjustmentOptions& adjustment;
+  const LevelWindowOptions& options;
+  const std::vector<MeshWindow>& windows;
+  bool many;  // surface outside the windows: occluders, margins held
+  int sweeps;
+  int free_margin_sweeps;
+  std::vector<WindowResult>& results;
+  std::mutex& say_mutex;  // guards `done` and the progress callback
+  int& done;              // windows finished, over all sweeps
+  const std::function<void(const std::string&)>& progress;
+};
+
+// Runs the adjustment of one window of a sweep into result->report (result->error when
+// it fails).
+void RunWindow(const LevelRun& run, const std::vector<LevelImage>& seeing, int sweep,
+               const std::vector<Eigen::Vector3d>& occluder_points,
+               const std::vector<Eigen::Vector3i>& occluders, WindowMesh* wm, WindowResult* result) {
+  try {
+    if (seeing.empty()) throw std::runtime_error("no image sees the window");
+    const std::vector<bool> fixed =
+        sweep < run.free_margin_sweeps ? std::vector<bool>(wm->fixed.size(), false) : wm->fixed;
+    std::vector<bool> judged(wm->fixed.size(), !run.many);
+    for (int local : wm->owned_local) judged[local] = true;
+    // Per-vertex sigma is taken from the last sweep only: earlier sweeps skip the
+    // precision (one solve per geometry unknown).
+    AdjustmentOptions sweep_options = run.adjustment;
+    if (sweep + 1 < run.sweeps) sweep_options.compute_precision = false;
+    result->report = RunWithCreasePass(&wm->mesh, seeing, sweep_options, fixed, judged, occluder_points,
+                                       occluders, run.options.crease_second_pass, result);
+    result->observed = true;
+  } catch (const std::runtime_error& e) {
+    result->error = e.what();
+  }
+}
+
+// The progress line of one finished window.
+std::string WindowLine(const LevelRun& run, int finished, int w, int sweep, const WindowResult& result) {
+  std::string line = "  window " + std::to_string(finished) + "/" +
+                     std::to_string(run.windows.size() * run.sweeps) + " (#" +
+                     std::to_string(w + 1) + ")" +
+                     (run.sweeps > 1 ? ", sweep " + std::to_string(sweep + 1) : "") +
+                     ": " + std::to_string(run.windows[w].core_faces.size()) + " core faces, ";
+  if (result.observed) {
+    line += std::to_string(result.report.iterations.size()) + " iterations, sigma0 " +
+            std::to_string(result.report.sigma0) + ", " +
+            std::to_string(result.report.observations) + " observations" +
+            (result.report.converged ? "" : result.report.stalled ? " (stalled)" : " (not converged)");
+  } else {
+    line += "not adjusted: " + result.error;
+  }
+  return line;
+}
+
+// One window of one sweep: extracted, adjusted, its core's vertices written back into
+// the level's mesh. `snapshot` and `face_boxes`: the surface before the window's group,
+// for the occluders.
+void AdjustWindow(const LevelRun& run, int w, int sweep, const Tessellation& snapshot,
+                  const std::vector<Eigen::AlignedBox3d>& face_boxes) {
+  TinMesh* mesh = run.mesh;
+  WindowMesh wm = ExtractWindowMesh(*mesh, run.windows[w]);
+  WindowResult& result = run.results[w];
+  result = WindowResult{};
+  result.global_face = wm.global_face;
+  ImageStorage storage;  // the window's image regions, freed with the window
+  const Eigen::AlignedBox3d grown = GrownBox(wm.mesh);
+  const std::vector<LevelImage> seeing = run.images(grown, &storage);
+  std::vector<Eigen::Vector3d> occluder_points;
+  std::vector<Eigen::Vector3i> occluders;
+  if (run.many && run.options.occluders) {
+    CollectOccluders(*mesh, run.windows[w], snapshot, face_boxes, grown, seeing, &occluder_points, &occluders);
+  }
+  RunWindow(run, seeing, sweep, occluder_points, occluders, &wm, &result);
+  // Only the core's vertices go back into the level's mesh.
+  for (int local : wm.owned_local) {
+    const auto lh = wm.mesh.vertex_handle(local);
+    const auto gh = mesh->vertex_handle(wm.global_vertex[local]);
+    mesh->set_point(gh, wm.mesh.point(lh));
+    mesh->set_normal(gh, wm.mesh.normal(lh));
+  }
+  int finished = 0;
+  {
+    std::lock_guard<std::mutex> lock(run.say_mutex);
+    finished = ++run.done;
+  }
+  const std::string line = WindowLine(run, finished, w, sweep, result);
+  {
+    std::lock_guard<std::mutex> lock(run.say_mutex);
+    if (run.progress) run.progress(line);
+  }
+  if (sweep + 1 == run.sweeps) KeepOwnedVertexResults(wm, &result);
+}
+
+// Adds one observed window's counts to the level's summary; *pooled: sum of sigma0^2 r.
+void AddToSummary(const WindowReport& r, WindowReport* s, double* pooled) {
+  s->converged = s->converged && r.converged;
+  s->observations += r.observations;
+  s->pseudo_observations += r.pseudo_observations;
+  s->background += r.background;
+  s->rejected += r.rejected;
+  s->downweighted += r.downweighted;
+  s->silhouette += r.silhouette;
+  s->silhouette_outside += r.silhouette_outside;
+  s->unknowns += r.unknowns;
+  s->redundancy += r.redundancy;
+  s->cg_iterations_total += r.cg_iterations_total;
+  s->crease_edges += r.crease_edges;
+  s->crease_passes_dropped += r.crease_passes_dropped;
+  s->crease_pass_iterations_dropped += r.crease_pass_iterations_dropped;
+  s->seconds_precision += r.seconds_precision;
+  s->precision_computed = s->precision_computed && r.precision_computed;
+  *pooled += r.sigma0 * r.sigma0 * static_cast<double>(r.redundancy);
+  // Correlation and variance factor: means weighted by the redundancy.
+  s->residual_rho_x += r.residual_rho_x * static_cast<double>(r.redundancy);
+  s->residual_rho_y += r.residual_rho_y * static_cast<double>(r.redundancy);
+  s->variance_factor += r.variance_factor * static_cast<double>(r.redundancy);
+  if (r.iterations.size() > s->iterations.size()) s->iterations = r.iterations;
+}
+
+// The level's summary and per-vertex values from its windows (LevelAdjustment::summary).
+void Summarise(const std::vector<MeshWindow>& windows, const std::vector<WindowResult>& results,
+               const LocalScope* local, int num_vertices, LevelAdjustment* level) {
+  WindowReport& s = level->summary;
+  s.converged = true;
+  if (local) {
+    s.vertex_sigma = local->previous->summary.vertex_sigma;
+    s.vertex_views = local->previous->summary.vertex_views;
+    s.vertex_flags = local->previous->summary.vertex_flags;
+  } else {
+    s.vertex_sigma.assign(num_vertices, 0.0);
+    s.vertex_views.assign(num_vertices, 0);
+    s.vertex_flags.assign(num_vertices, kVertexFewViews);
+  }
+  s.precision_computed = true;
+  s.variance_factor = 0.0;  // pooled below
+  double pooled = 0.0;
+  bool any = false;
+  for (size_t w = 0; w < windows.size(); ++w) {
+    const WindowResult& result = results[w];
+    const WindowReport& r = result.report;
+    for (size_t i = 0; i < windows[w].owned_vertices.size(); ++i) {
+      const int v = windows[w].owned_vertices[i];
+      s.vertex_sigma[v] = r.vertex_sigma[i];
+      s.vertex_views[v] = r.vertex_views[i];
+      s.vertex_flags[v] = static_cast<uint8_t>(r.vertex_flags[i] & ~kVertexFixed);
+    }
+    if (!result.observed) {
+      s.converged = false;
+      level->windows.push_back(r);
+      continue;
+    }
+    any = true;
+    AddToSummary(r, &s, &pooled);
+    level->windows.push_back(r);
+  }
+  if (!any) {
+    throw std::runtime_error("no window of the level has any observation (" +
+                             results.front().error + ")");
+  }
+  s.sigma0 = s.redundancy > 0 ? std::sqrt(pooled / static_cast<double>(s.redundancy)) : 0.0;
+  if (s.redundancy > 0) {
+    s.residual_rho_x /= static_cast<double>(s.redundancy);
+    s.residual_rho_y /= static_cast<double>(s.redundancy);
+    s.variance_factor /= static_cast<double>(s.redundancy);
+  } else {
+    s.variance_factor = 1.0;
+  }
+  s.radiometry = windows.size() == 1 && !local ? results.front().report.radiometry
+                                     : std::vector<std::vector<std::array<double, 2>>>{};
+}
+
+// Grey values of the level's tessellation, each face's from the window whose core holds
+// it (face_window: that window per face, -1 outside every core).
+void CopyWindowGrey(const std::vector<WindowResult>& results, const std::vector<int>& face_window, int channels,
+                    LevelAdjustment* level) {
+  for (size_t w = 0; w < results.size(); ++w) {
+    const WindowResult& result = results[w];
+    if (!result.observed) continue;
+    for (size_t lf = 0; lf < result.global_face.size(); ++lf) {
+      const int f = result.global_face[lf];
+      if (face_window[f] != static_cast<int>(w)) continue;
+      for (int k = 0; k < kSubTrianglesPerFace; ++k) {
+        const Eigen::Vector3i& to = level->tessellation.triangles[f * kSubTrianglesPerFace + k];
+        const Eigen::Vector3i& from = result.triangles[lf * kSubTrianglesPerFace + k];
+        for (int corner = 0; corner < 3; ++corner) {
+          for (int c = 0; c < channels; ++c) {
+            level->grey[static_cast<size_t>(to[corner]) * channels + c] =
+                result.grey[static_cast<size_t>(from[corner]) * channels + c];
+          }
+        }
+      }
+    }
+  }
+}
+
+// Faces outside a local run's cores: the grey values of the previous adjustment
+// (same faces, same sub-triangles) where no local window set them.
+void CopyPreviousGrey(const LevelAdjustment* previous, const std::vector<int>& face_window, int channels,
+                      LevelAdjustment* level) {
+  if (!previous || previous->tessellation.triangles.size() != level->tessellation.triangles.size() ||
+      previous->grey.empty()) {
+    return;
+  }
+  const int previous_channels =
+      static_cast<int>(previous->grey.size() / std::max<size_t>(1, previous->tessellation.points.size()));
+  for (size_t f = 0; f < face_window.size() && previous_channels == channels; ++f) {
+    if (face_window[f] >= 0) continue;
+    for (int k = 0; k < kSubTrianglesPerFace; ++k) {
+      const Eigen::Vector3i& to = level->tessellation.triangles[f * kSubTrianglesPerFace + k];
+      const Eigen::Vector3i& from = previous->tessellation.triangles[f * kSubTrianglesPerFace + k];
+      for (int corner = 0; corner < 3; ++corner) {
+        for (int c = 0; c < channels; ++c) {
+          double& grey = level->grey[static_cast<size_t>(to[corner]) * channels + c];
+          if (!std::isfinite(grey)) grey = previous->grey[static_cast<size_t>(from[corner]) * channels + c];
+        }
+      }
+    }
+  }
+}
+
+// LevelAdjustment::tessellation and grey of the final surface (keep_grey).
+void GatherLevelGrey(const TinMesh& mesh, const AdjustmentOptions& adjustment,
+                     const std::vector<WindowResult>& results, const std::vector<int>& face_window,
+                     const LocalScope* local, LevelAdjustment* level) {
+  level->tessellation = TessellateWithCreases(mesh, adjustment);
+  const int channels = results.front().channels;
+  level->grey.assign(level->tessellation.points.size() * channels,
+                     std::numeric_limits<double>::quiet_NaN());
+  CopyWindowGrey(results, face_window, channels, level);
+  CopyPreviousGrey(local ? local->previous : nullptr, face_window, channels, level);
+  // Nodes of windows without observations: the mean grey value.
+  double sum = 0.0;
+  long long count = 0;
+  for (double g : level->grey) {
+    if (std::isfinite(g)) sum += g, ++count;
+  }
+  for (double& g : level->grey) {
+    if (!std::isfinite(g)) g = count > 0 ? sum / count : 0.0;
+  }
+}
+
 }  // namespace
 
 void LevelWindowOptions::Check() const {
@@ -124,11 +413,6 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
     throw std::invalid_argument("local re-adjustment: needs the level's previous adjustment of the same mesh");
   }
   const auto start = std::chrono::steady_clock::now();
-  std::mutex say_mutex;
-  auto say = [&](const std::string& line) {
-    std::lock_guard<std::mutex> lock(say_mutex);
-    if (progress) progress(line);
-  };
   LevelAdjustment level;
   const std::vector<MeshWindow> windows = local ? local->windows : PartitionIntoWindows(*mesh, options.partition);
   if (windows.empty()) throw std::runtime_error("no window to adjust");
@@ -137,19 +421,19 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
   for (const auto& w : windows) level.window_core_faces.push_back(static_cast<int>(w.core_faces.size()));
   // A local run has surface outside its windows: occluders and fixed margins as with many.
   const bool many = windows.size() > 1 || local;
-  // Its neighbours are adjusted already: margins held from the first sweep on.
-  const int free_margin_sweeps = local ? 0 : options.free_margin_sweeps;
   std::vector<int> face_window(mesh->n_faces(), -1);
   for (size_t w = 0; w < windows.size(); ++w) {
     for (int f : windows[w].core_faces) face_window[f] = static_cast<int>(w);
   }
 
-  const int num_vertices = static_cast<int>(mesh->n_vertices());
   std::vector<WindowResult> results(windows.size());
+  std::mutex say_mutex;
   int done = 0;
-  // One window holds every vertex: nothing to sweep over.
-  const int sweeps = many ? options.sweeps : 1;
-  for (int sweep = 0; sweep < sweeps; ++sweep) {
+  // One window holds every vertex: nothing to sweep over. A local run's neighbours are
+  // adjusted already: margins held from the first sweep on.
+  const LevelRun run{mesh, images, adjustment, options, windows, many, many ? options.sweeps : 1,
+                     local ? 0 : options.free_margin_sweeps, results, say_mutex, done, progress};
+  for (int sweep = 0; sweep < run.sweeps; ++sweep) {
     for (const std::vector<int>& group : groups) {
       // The surface as it stands before this group, for the occluders: the windows of a
       // group change disjoint parts and must not read each other's half-moved state.
@@ -160,228 +444,15 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
         face_boxes = FaceBoxes(snapshot);
       }
       tbb::parallel_for(size_t{0}, group.size(), [&](size_t g) {
-        const int w = group[g];
-        WindowMesh wm = ExtractWindowMesh(*mesh, windows[w]);
-        WindowResult& result = results[w];
-        result = WindowResult{};
-        result.global_face = wm.global_face;
-        ImageStorage storage;  // the window's image regions, freed with the window
-        const Eigen::AlignedBox3d grown = GrownBox(wm.mesh);
-        const std::vector<LevelImage> seeing = images(grown, &storage);
-        // Occluders: only the faces outside the window that can stand between one of
-        // the window's images and the (grown) window, as their own points.
-        std::vector<Eigen::Vector3d> occluder_points;
-        std::vector<Eigen::Vector3i> occluders;
-        if (many && options.occluders) {
-          std::vector<OccluderView> views;
-          for (const LevelImage& image : seeing) views.push_back({image.camera, image.cam_from_world});
-          std::vector<char> in_window(mesh->n_faces(), 0);
-          for (int f : windows[w].faces) in_window[f] = 1;
-          std::vector<int> point_index(snapshot.points.size(), -1);
-          for (int f : FacesThatCanHide(face_boxes, grown, views)) {
-            if (in_window[f]) continue;
-            for (int s = f * kSubTrianglesPerFace; s < (f + 1) * kSubTrianglesPerFace; ++s) {
-              Eigen::Vector3i tri;
-              for (int c = 0; c < 3; ++c) {
-                int& index = point_index[snapshot.triangles[s][c]];
-                if (index < 0) {
-                  index = static_cast<int>(occluder_points.size());
-                  occluder_points.push_back(snapshot.points[snapshot.triangles[s][c]]);
-                }
-                tri[c] = index;
-              }
-              occluders.push_back(tri);
-            }
-          }
-        }
-        try {
-          if (seeing.empty()) throw std::runtime_error("no image sees the window");
-          const std::vector<bool> fixed =
-              sweep < free_margin_sweeps ? std::vector<bool>(wm.fixed.size(), false) : wm.fixed;
-          std::vector<bool> judged(wm.fixed.size(), !many);
-          for (int local : wm.owned_local) judged[local] = true;
-          // Per-vertex sigma is taken from the last sweep only: earlier sweeps skip the
-          // precision (one solve per geometry unknown).
-          AdjustmentOptions sweep_options = adjustment;
-          if (sweep + 1 < sweeps) sweep_options.compute_precision = false;
-          result.report = RunWithCreasePass(&wm.mesh, seeing, sweep_options, fixed, judged, occluder_points,
-                                            occluders, options.crease_second_pass, &result);
-          result.observed = true;
-        } catch (const std::runtime_error& e) {
-          result.error = e.what();
-        }
-        // Only the core's vertices go back into the level's mesh.
-        for (int local : wm.owned_local) {
-          const auto lh = wm.mesh.vertex_handle(local);
-          const auto gh = mesh->vertex_handle(wm.global_vertex[local]);
-          mesh->set_point(gh, wm.mesh.point(lh));
-          mesh->set_normal(gh, wm.mesh.normal(lh));
-        }
-        int finished = 0;
-        {
-          std::lock_guard<std::mutex> lock(say_mutex);
-          finished = ++done;
-        }
-        std::string line = "  window " + std::to_string(finished) + "/" +
-                           std::to_string(windows.size() * sweeps) + " (#" +
-                           std::to_string(w + 1) + ")" +
-                           (sweeps > 1 ? ", sweep " + std::to_string(sweep + 1) : "") +
-                           ": " + std::to_string(windows[w].core_faces.size()) + " core faces, ";
-        if (result.observed) {
-          line += std::to_string(result.report.iterations.size()) + " iterations, sigma0 " +
-                  std::to_string(result.report.sigma0) + ", " +
-                  std::to_string(result.report.observations) + " observations" +
-                  (result.report.converged ? "" : result.report.stalled ? " (stalled)" : " (not converged)");
-        } else {
-          line += "not adjusted: " + result.error;
-        }
-        say(line);
-        // Per-vertex results, re-indexed to the owned vertices (MeshWindow order).
-        if (sweep + 1 == sweeps) {
-          WindowReport& r = result.report;
-          std::vector<double> sigma;
-          std::vector<int> views;
-          std::vector<uint8_t> flags;
-          for (int local : wm.owned_local) {
-            sigma.push_back(result.observed ? r.vertex_sigma[local] : 0.0);
-            views.push_back(result.observed ? r.vertex_views[local] : 0);
-            flags.push_back(result.observed ? r.vertex_flags[local] : uint8_t{kVertexFewViews});
-          }
-          r.vertex_sigma = std::move(sigma);
-          r.vertex_views = std::move(views);
-          r.vertex_flags = std::move(flags);
-        }
+        AdjustWindow(run, group[g], sweep, snapshot, face_boxes);
       });
     }
   }
   UpdateVertexNormals(mesh);
 
-  // Summary and per-vertex values.
-  WindowReport& s = level.summary;
-  s.converged = true;
-  if (local) {
-    s.vertex_sigma = local->previous->summary.vertex_sigma;
-    s.vertex_views = local->previous->summary.vertex_views;
-    s.vertex_flags = local->previous->summary.vertex_flags;
-  } else {
-    s.vertex_sigma.assign(num_vertices, 0.0);
-    s.vertex_views.assign(num_vertices, 0);
-    s.vertex_flags.assign(num_vertices, kVertexFewViews);
-  }
-  s.precision_computed = true;
-  s.variance_factor = 0.0;  // pooled below
-  double pooled = 0.0;
-  bool any = false;
-  for (size_t w = 0; w < windows.size(); ++w) {
-    const WindowResult& result = results[w];
-    const WindowReport& r = result.report;
-    for (size_t i = 0; i < windows[w].owned_vertices.size(); ++i) {
-      const int v = windows[w].owned_vertices[i];
-      s.vertex_sigma[v] = r.vertex_sigma[i];
-      s.vertex_views[v] = r.vertex_views[i];
-      s.vertex_flags[v] = static_cast<uint8_t>(r.vertex_flags[i] & ~kVertexFixed);
-    }
-    if (!result.observed) {
-      s.converged = false;
-      level.windows.push_back(r);
-      continue;
-    }
-    any = true;
-    s.converged = s.converged && r.converged;
-    s.observations += r.observations;
-    s.pseudo_observations += r.pseudo_observations;
-    s.background += r.background;
-    s.rejected += r.rejected;
-    s.downweighted += r.downweighted;
-    s.silhouette += r.silhouette;
-    s.silhouette_outside += r.silhouette_outside;
-    s.plumb += r.plumb;
-    s.unknowns += r.unknowns;
-    s.redundancy += r.redundancy;
-    s.cg_iterations_total += r.cg_iterations_total;
-    s.crease_edges += r.crease_edges;
-    s.crease_passes_dropped += r.crease_passes_dropped;
-    s.crease_pass_iterations_dropped += r.crease_pass_iterations_dropped;
-    s.seconds_precision += r.seconds_precision;
-    s.precision_computed = s.precision_computed && r.precision_computed;
-    pooled += r.sigma0 * r.sigma0 * static_cast<double>(r.redundancy);
-    // Correlation and variance factor: means weighted by the redundancy.
-    s.residual_rho_x += r.residual_rho_x * static_cast<double>(r.redundancy);
-    s.residual_rho_y += r.residual_rho_y * static_cast<double>(r.redundancy);
-    s.variance_factor += r.variance_factor * static_cast<double>(r.redundancy);
-    if (r.iterations.size() > s.iterations.size()) s.iterations = r.iterations;
-    level.windows.push_back(r);
-  }
-  if (!any) {
-    throw std::runtime_error("no window of the level has any observation (" +
-                             results.front().error + ")");
-  }
-  s.sigma0 = s.redundancy > 0 ? std::sqrt(pooled / static_cast<double>(s.redundancy)) : 0.0;
-  if (s.redundancy > 0) {
-    s.residual_rho_x /= static_cast<double>(s.redundancy);
-    s.residual_rho_y /= static_cast<double>(s.redundancy);
-    s.variance_factor /= static_cast<double>(s.redundancy);
-  } else {
-    s.variance_factor = 1.0;
-  }
-  s.radiometry = windows.size() == 1 && !local ? results.front().report.radiometry
-                                     : std::vector<std::vector<std::array<double, 2>>>{};
-
-  if (keep_grey) {
-    level.tessellation = TessellateWithCreases(*mesh, adjustment);
-    const int channels = results.front().channels;
-    level.grey.assign(level.tessellation.points.size() * channels,
-                      std::numeric_limits<double>::quiet_NaN());
-    for (size_t w = 0; w < windows.size(); ++w) {
-      const WindowResult& result = results[w];
-      if (!result.observed) continue;
-      for (size_t lf = 0; lf < result.global_face.size(); ++lf) {
-        const int f = result.global_face[lf];
-        if (face_window[f] != static_cast<int>(w)) continue;
-        for (int k = 0; k < kSubTrianglesPerFace; ++k) {
-          const Eigen::Vector3i& to = level.tessellation.triangles[f * kSubTrianglesPerFace + k];
-          const Eigen::Vector3i& from = result.triangles[lf * kSubTrianglesPerFace + k];
-          for (int corner = 0; corner < 3; ++corner) {
-            for (int c = 0; c < channels; ++c) {
-              level.grey[static_cast<size_t>(to[corner]) * channels + c] =
-                  result.grey[static_cast<size_t>(from[corner]) * channels + c];
-            }
-          }
-        }
-      }
-    }
-    // Faces outside a local run's cores: the grey values of the previous adjustment
-    // (same faces, same sub-triangles) where no local window set them.
-    const LevelAdjustment* previous = local ? local->previous : nullptr;
-    if (previous && previous->tessellation.triangles.size() == level.tessellation.triangles.size() &&
-        !previous->grey.empty()) {
-      const int previous_channels =
-          static_cast<int>(previous->grey.size() / std::max<size_t>(1, previous->tessellation.points.size()));
-      for (size_t f = 0; f < face_window.size() && previous_channels == channels; ++f) {
-        if (face_window[f] >= 0) continue;
-        for (int k = 0; k < kSubTrianglesPerFace; ++k) {
-          const Eigen::Vector3i& to = level.tessellation.triangles[f * kSubTrianglesPerFace + k];
-          const Eigen::Vector3i& from = previous->tessellation.triangles[f * kSubTrianglesPerFace + k];
-          for (int corner = 0; corner < 3; ++corner) {
-            for (int c = 0; c < channels; ++c) {
-              double& grey = level.grey[static_cast<size_t>(to[corner]) * channels + c];
-              if (!std::isfinite(grey)) grey = previous->grey[static_cast<size_t>(from[corner]) * channels + c];
-            }
-          }
-        }
-      }
-    }
-    // Nodes of windows without observations: the mean grey value.
-    double sum = 0.0;
-    long long count = 0;
-    for (double g : level.grey) {
-      if (std::isfinite(g)) sum += g, ++count;
-    }
-    for (double& g : level.grey) {
-      if (!std::isfinite(g)) g = count > 0 ? sum / count : 0.0;
-    }
-  }
-  s.seconds_total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  Summarise(windows, results, local, static_cast<int>(mesh->n_vertices()), &level);
+  if (keep_grey) GatherLevelGrey(*mesh, adjustment, results, face_window, local, &level);
+  level.summary.seconds_total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return level;
 }
 

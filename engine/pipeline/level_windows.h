@@ -57,7 +57,7 @@ struct LevelAdjustment {
 
 // The images a window gets: those whose view overlaps the box, with pixels at least
 // over its projection; regions read for the window go into the storage, which lives
-// as long as the window's adjustment (engine/level_image_store.h).
+// as long as the window's adjustment (engine/images/level_image_store.h).
 using WindowImages = std::function<std::vector<LevelImage>(const Eigen::AlignedBox3d& box,
                                                            ImageStorage* storage)>;
 

@@ -17,10 +17,8 @@ namespace facets {
 namespace {
 
 struct Candidate {
-  Eigen::Vector3d move = Eigen::Vector3d::Zero();
-  double offset = 0.0;  // along the winning direction (the normal unless corner)
+  double offset = 0.0;  // along the normal (m)
   bool peak = false;
-  bool corner = false;  // won by a corner hypothesis
 };
 
 // Whether the image holds every sample the search can ask of it: the patch at both ends
@@ -72,11 +70,105 @@ Scan ScanAlong(const Eigen::Vector3d& p, const Eigen::Vector3d& direction, const
   return result;
 }
 
-// A direction to move along (the patch lies in the plane normal to it).
-struct Hypothesis {
-  Eigen::Vector3d direction;
-  bool corner = false;
+// What the search of every vertex reads.
+struct SearchContext {
+  const TinMesh& mesh;
+  const std::vector<LevelImage>& images;
+  const std::vector<Eigen::Vector3d>& points;
+  const std::vector<Eigen::Vector3d>& centres;  // of the images' projection centres
+  const TriangleScene& scene;
+  const NormalSearchOptions& options;
+  double ground_pixel;
+  double range;         // of the offsets (m)
+  double patch_radius;  // m
+  // Rays blocked no closer than this to the vertex count as seeing it: the surface
+  // around a vertex that is off by up to the range may stand in its own way.
+  double tolerance;
+  double max_cos_to_views;  // cos of NormalSearchOptions::min_angle_to_views_deg
 };
+
+// The images whose rays to p are free up to the tolerance before it.
+void FindVisible(const SearchContext& s, const Eigen::Vector3d& p, std::vector<size_t>* visible) {
+  visible->clear();
+  for (size_t k = 0; k < s.images.size(); ++k) {
+    const Eigen::Vector3d d = p - s.centres[k];
+    const double length = d.norm();
+    if (!(length > s.tolerance)) continue;
+    const RayHit hit = s.scene.Intersect(s.centres[k], d, 0.0f, static_cast<float>(1.0 - s.tolerance / length));
+    if (!hit.hit) visible->push_back(k);
+  }
+}
+
+// Of the visible images, those that see the plane through p with this normal and hold the
+// search box along it; whether they are at least min_images.
+bool FindSeeing(const SearchContext& s, const Eigen::Vector3d& p, const Eigen::Vector3d& normal,
+                const std::vector<size_t>& visible, std::vector<const LevelImage*>* seeing) {
+  seeing->clear();
+  for (size_t k : visible) {
+    const Eigen::Vector3d d = p - s.centres[k];
+    if (-normal.dot(d) < s.options.min_cos * d.norm()) continue;
+    if (!HoldsSearchBox(s.images[k], p, normal, s.range, s.patch_radius)) continue;
+    seeing->push_back(&s.images[k]);
+  }
+  return static_cast<int>(seeing->size()) >= s.options.min_images;
+}
+
+// Searches vertex v along its normal; returns whether it was searched (steep to the
+// images that see it), *candidate: its accepted peak, if any.
+bool SearchVertex(const SearchContext& s, size_t v, std::vector<size_t>* visible,
+                  std::vector<const LevelImage*>* seeing, Candidate* candidate) {
+  const NormalSearchOptions& options = s.options;
+  const auto vh = s.mesh.vertex_handle(static_cast<int>(v));
+  if (s.mesh.is_boundary(vh)) return false;
+  const Eigen::Vector3d& p = s.points[v];
+  const Eigen::Vector3d normal = ToEigen(s.mesh.normal(vh));
+  FindVisible(s, p, visible);
+  // Only a vertex steep to its images (a wall) is searched.
+  if (!FindSeeing(s, p, normal, *visible, seeing)) return false;
+  if (options.min_angle_to_views_deg > 0.0) {
+    Eigen::Vector3d towards = Eigen::Vector3d::Zero();
+    for (const LevelImage* image : *seeing) towards += (s.centres[image - s.images.data()] - p).normalized();
+    const bool steep = towards.normalized().dot(normal) <= s.max_cos_to_views;
+    if (!steep) return false;
+  }
+  // The score where the vertex is (offset 0, the patch in its own tangent plane) is
+  // what a peak must beat by min_gain.
+  const Scan scan = ScanAlong(p, normal, *seeing, s.ground_pixel, options);
+  const double here = scan.here;
+  if (!scan.peak) return true;
+  if (std::isfinite(here) && scan.best - here < options.min_gain) return true;
+  candidate->offset = scan.offset;
+  candidate->peak = true;
+  return true;
+}
+
+// Median of the candidate moves over the vertex and its neighbours that face the same
+// way (no peak counts as no move): a lone false peak is outvoted. Counts the searched
+// vertices and peaks into *report.
+std::vector<Eigen::Vector3d> MedianMoves(const TinMesh& mesh, const std::vector<Candidate>& candidates,
+                                         const std::vector<char>& searched, const NormalSearchOptions& options,
+                                         NormalSearchReport* report) {
+  const size_t n = candidates.size();
+  std::vector<Eigen::Vector3d> moves(n, Eigen::Vector3d::Zero());
+  for (size_t v = 0; v < n; ++v) {
+    report->searched += searched[v];
+    report->peaks += candidates[v].peak;
+    if (!candidates[v].peak) continue;
+    const auto vh = mesh.vertex_handle(static_cast<int>(v));
+    const Eigen::Vector3d normal = ToEigen(mesh.normal(vh));
+    std::vector<const Candidate*> around = {&candidates[v]};
+    for (auto vv : mesh.vv_range(vh)) {
+      if (ToEigen(mesh.normal(vv)).dot(normal) < options.neighbour_cos) continue;
+      around.push_back(searched[vv.idx()] ? &candidates[vv.idx()] : &candidates[v]);
+    }
+    const size_t middle = around.size() / 2;
+    std::vector<double> values;
+    for (const Candidate* c : around) values.push_back(c->offset);
+    std::nth_element(values.begin(), values.begin() + middle, values.end());
+    moves[v] = values[middle] * normal;
+  }
+  return moves;
+}
 
 }  // namespace
 
@@ -88,16 +180,12 @@ NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImag
   TinPointsAndTriangles(*mesh, &points, &triangles);
   if (triangles.empty() || images.empty()) return report;
   const TriangleScene scene(EmbreeDevice::Shared(), points, triangles);
-  const double range = options.range_pixels * ground_pixel;
-  // Rays blocked no closer than this to the vertex count as seeing it: the surface
-  // around a vertex that is off by up to the range may stand in its own way.
-  const double patch_radius = options.patch_half * options.sample_pixels * ground_pixel;
-  const double tolerance = range + patch_radius;
   std::vector<Eigen::Vector3d> centres;
   for (const LevelImage& image : images) centres.push_back(image.cam_from_world.Inverse().translation);
-  const double max_cos_to_views = std::cos(options.min_angle_to_views_deg * M_PI / 180.0);
-  const double ramp_max_z = std::cos(options.corner_min_deg * M_PI / 180.0);
-  const double ramp_min_z = std::cos(options.corner_max_deg * M_PI / 180.0);
+  const double range = options.range_pixels * ground_pixel;
+  const double patch_radius = options.patch_half * options.sample_pixels * ground_pixel;
+  const SearchContext context{*mesh, images, points, centres, scene, options, ground_pixel, range, patch_radius,
+                              range + patch_radius, std::cos(options.min_angle_to_views_deg * M_PI / 180.0)};
   const size_t n = points.size();
   std::vector<Candidate> candidates(n);
   std::vector<char> searched(n, 0);
@@ -105,118 +193,10 @@ NormalSearchReport SearchAlongNormals(TinMesh* mesh, const std::vector<LevelImag
     std::vector<size_t> visible;  // images whose ray to the vertex is free
     std::vector<const LevelImage*> seeing;
     for (size_t v = r.begin(); v != r.end(); ++v) {
-      const auto vh = mesh->vertex_handle(static_cast<int>(v));
-      if (mesh->is_boundary(vh)) continue;
-      const Eigen::Vector3d& p = points[v];
-      const Eigen::Vector3d normal = ToEigen(mesh->normal(vh));
-      // The images that see a plane through the vertex with this normal and hold the
-      // search box along `direction`.
-      auto images_seeing = [&](const Eigen::Vector3d& direction) {
-        seeing.clear();
-        for (size_t k : visible) {
-          const Eigen::Vector3d d = p - centres[k];
-          if (-direction.dot(d) < options.min_cos * d.norm()) continue;
-          if (!HoldsSearchBox(images[k], p, direction, range, patch_radius)) continue;
-          seeing.push_back(&images[k]);
-        }
-        return static_cast<int>(seeing.size()) >= options.min_images;
-      };
-      visible.clear();
-      for (size_t k = 0; k < images.size(); ++k) {
-        const Eigen::Vector3d d = p - centres[k];
-        const double length = d.norm();
-        if (!(length > tolerance)) continue;
-        const RayHit hit = scene.Intersect(centres[k], d, 0.0f, static_cast<float>(1.0 - tolerance / length));
-        if (!hit.hit) visible.push_back(k);
-      }
-      // Which hypotheses the vertex tries: its normal when it is steep to its images
-      // (a wall), the corner ones when it lies on a ramp.
-      std::vector<Hypothesis> hypotheses;
-      const bool normal_seen = images_seeing(normal);
-      const std::vector<const LevelImage*> seeing_normal = seeing;  // corner hypotheses reuse `seeing`
-      if (normal_seen) {
-        bool steep = true;
-        if (options.min_angle_to_views_deg > 0.0) {
-          Eigen::Vector3d towards = Eigen::Vector3d::Zero();
-          for (const LevelImage* image : seeing_normal) towards += (centres[image - images.data()] - p).normalized();
-          steep = towards.normalized().dot(normal) <= max_cos_to_views;
-        }
-        if (steep) hypotheses.push_back({normal, false});
-      }
-      const double nz = std::abs(normal.z());
-      const Eigen::Vector3d horizontal(normal.x(), normal.y(), 0.0);
-      if (options.corners && nz <= ramp_max_z && nz >= ramp_min_z && horizontal.norm() > 0.0) {
-        hypotheses.push_back({horizontal.normalized(), true});
-        hypotheses.push_back({Eigen::Vector3d(0.0, 0.0, normal.z() >= 0.0 ? 1.0 : -1.0), true});
-      }
-      if (hypotheses.empty()) continue;
-      // The score where the vertex is, with the patch in its own tangent plane: what a
-      // peak must beat by min_gain (the scan along the normal gives it).
-      searched[v] = 1;
-      Scan along_normal;
-      if (normal_seen) along_normal = ScanAlong(p, normal, seeing_normal, ground_pixel, options);
-      const double here = along_normal.here;
-      if (std::isfinite(here) && here >= options.max_score_here) continue;
-      Candidate best;
-      double best_score = -std::numeric_limits<double>::infinity();
-      for (const Hypothesis& hypothesis : hypotheses) {
-        Scan scan = along_normal;
-        if (hypothesis.corner) {
-          if (!images_seeing(hypothesis.direction)) continue;
-          scan = ScanAlong(p, hypothesis.direction, seeing, ground_pixel, options);
-        }
-        if (!scan.peak || scan.best <= best_score) continue;
-        if (std::isfinite(here) && scan.best - here < options.min_gain) continue;
-        best_score = scan.best;
-        best.move = scan.offset * hypothesis.direction;
-        best.offset = scan.offset;
-        best.peak = true;
-        best.corner = hypothesis.corner;
-      }
-      candidates[v] = best;
+      searched[v] = SearchVertex(context, v, &visible, &seeing, &candidates[v]) ? 1 : 0;
     }
   });
-  // Median of the candidate moves over the vertex and its neighbours that face the same
-  // way (no peak counts as no move): a lone false peak is outvoted. Offsets along the
-  // normals when every move is along a normal; component-wise over the move vectors
-  // with the corner hypotheses (ramp neighbours that disagree, one to the wall and one
-  // to the ground, cancel).
-  std::vector<Eigen::Vector3d> moves(n, Eigen::Vector3d::Zero());
-  for (size_t v = 0; v < n; ++v) {
-    report.searched += searched[v];
-    report.peaks += candidates[v].peak;
-    report.corner_peaks += candidates[v].corner;
-    if (!candidates[v].peak) continue;
-    const auto vh = mesh->vertex_handle(static_cast<int>(v));
-    const Eigen::Vector3d normal = ToEigen(mesh->normal(vh));
-    std::vector<const Candidate*> around = {&candidates[v]};
-    int support = 0;
-    for (auto vv : mesh->vv_range(vh)) {
-      if (ToEigen(mesh->normal(vv)).dot(normal) < options.neighbour_cos) continue;
-      const Candidate& other = candidates[vv.idx()];
-      around.push_back(searched[vv.idx()] ? &other : &candidates[v]);
-      support += other.peak && (other.move - candidates[v].move).norm() <=
-                                   options.support_steps * options.step_pixels * ground_pixel;
-    }
-    if (options.support_filter) {
-      if (support > 0) moves[v] = candidates[v].move;
-      continue;
-    }
-    const size_t middle = around.size() / 2;
-    std::vector<double> values;
-    if (!options.corners) {
-      for (const Candidate* c : around) values.push_back(c->offset);
-      std::nth_element(values.begin(), values.begin() + middle, values.end());
-      moves[v] = values[middle] * normal;
-      continue;
-    }
-    for (int c = 0; c < 3; ++c) {
-      values.clear();
-      for (const Candidate* m : around) values.push_back(m->move[c]);
-      std::nth_element(values.begin(), values.begin() + middle, values.end());
-      moves[v][c] = values[middle];
-    }
-  }
+  const std::vector<Eigen::Vector3d> moves = MedianMoves(*mesh, candidates, searched, options, &report);
   const std::vector<Eigen::Vector3d> before = points;
   const double least = 0.1 * options.step_pixels * ground_pixel;
   for (size_t v = 0; v < n; ++v) {

@@ -1,14 +1,13 @@
-// Search along the vertex normals between pyramid levels (issue 7): a coarse level that
-// put a wall or an eave 1-2.5 m off leaves it 4-10 pixels off on the next level, beyond
-// the pull-in of least-squares matching (docs/EXPERIMENTS.md, session 8). Before such a
-// level is adjusted, every vertex tries offsets along its normal over a range of level
-// pixels: a small patch in its tangent plane is projected into the images that see it
-// and scored by the mean pairwise normalised cross-correlation of their grey values
-// (object lifting of seed 001, done per vertex and along the normal). Vertices with a
-// clear, better peak move there; the moves are median-filtered over neighbours facing
-// the same way (a single false match does not survive), and steps that fold the surface
-// are halved or undone (mesh/surface_validity.h). The adjustment then starts within its
-// pull-in.
+// Search along the vertex normals between pyramid levels: a coarse level that put a wall
+// or an eave 1-2.5 m off leaves it 4-10 pixels off on the next level, beyond the pull-in
+// of least-squares matching. Before such a level is adjusted, every vertex tries offsets
+// along its normal over a range of level pixels: a small patch in its tangent plane is
+// projected into the images that see it and scored by the mean pairwise normalised
+// cross-correlation of their grey values (object lifting of seed 001, done per vertex
+// and along the normal). Vertices with a clear, better peak move there; the moves are
+// median-filtered over neighbours facing the same way (a single false match does not
+// survive), and steps that fold the surface are halved or undone
+// (mesh/surface_validity.h). The adjustment then starts within its pull-in.
 #pragma once
 
 #include <vector>
@@ -26,39 +25,22 @@ struct NormalSearchOptions {
   double min_cos = 0.2;       // an image sees the vertex's plane at |cos| >= this
   int min_images = 2;
   double min_contrast = 2.0;  // grey-value standard deviation of a patch in an image
-  // Mean pairwise NCC of the best offset. 0.4: whole block walls 55.2 % (0.5: 48.5 %, 0.3:
-  // 56.1 % but the roof at 0.202 GSD against 0.146; docs/EXPERIMENTS.md, session 9).
+  // Least mean pairwise NCC of the best offset (-1..1): higher takes fewer walls back,
+  // lower takes false peaks on roofs (the block's roofs 0.20 GSD off at 0.3 against 0.15
+  // at 0.4).
   double min_score = 0.4;
   double min_gain = 0.1;      // over the score where the vertex is
-  // Vertices whose images already agree where they are (score >= this) stay: a search
-  // there can only find a look-alike.
-  double max_score_here = 1.0;
   // Only vertices whose normal turns more than this from the mean direction to the images
-  // that see them (walls of an aerial block, not its roofs and ground; 0 = every vertex:
-  // on the seed table 3 of 28 runs then miss, docs/EXPERIMENTS.md).
+  // that see them, degrees (walls of an aerial block, not its roofs and ground; 0 = every
+  // vertex, which lets look-alike peaks move roofs and terrain).
   double min_angle_to_views_deg = 45.0;
   double neighbour_cos = 0.8;  // neighbours that vote face within ~37 deg
-  // Filter of the peaks: false = median over the vertex and its neighbours that face the
-  // same way (no peak counts as no move); true = a peak is kept when at least one such
-  // neighbour has a peak within support_steps offset steps of it.
-  bool support_filter = false;
-  double support_steps = 3.0;
-  // Corner hypotheses (issue 7): a coarse level leaves the foot of a wall as a ramp from
-  // the ground up the wall, and an eave as a ramp from the roof down it (normals 20-70
-  // deg from vertical); a search along such a normal looks for a plane at 45 deg that is
-  // not there. With this on, ramp vertices also try a wall through them (moves along the
-  // normal's horizontal part, patch vertical) and a roof or ground through them (moves
-  // along the vertical, patch horizontal); the best of the three peaks wins.
-  bool corners = false;
-  double corner_min_deg = 20.0;  // ramp: normal this far from vertical or more
-  double corner_max_deg = 70.0;  // and at most this far
 };
 
 struct NormalSearchReport {
   int searched = 0;  // vertices with >= min_images images
   int peaks = 0;     // of them with an accepted peak off zero
   int moved = 0;     // moved after the median filter (|move| >= a tenth of a step)
-  int corner_peaks = 0;  // peaks won by a corner hypothesis (NormalSearchOptions::corners)
   int limited = 0;   // moves the fold guard halved or undid
   double median_move = 0.0;  // |move| of the moved vertices (m)
   double max_move = 0.0;

@@ -1,7 +1,7 @@
 // Photo-consistency of a small planar patch in object space: the mean pairwise
 // normalised cross-correlation of the grey values the images see at its samples (object
 // lifting of seed 001, per patch). Shared by the searches between pyramid levels
-// (engine/normal_search.h, engine/plane_propagation.h).
+// (engine/search/normal_search.h, engine/search/plane_propagation.h).
 #pragma once
 
 #include <Eigen/Core>

@@ -1,7 +1,7 @@
-// Plane propagation between pyramid levels (issue 7): a wall that a coarse level put
+// Plane propagation between pyramid levels: a wall that a coarse level put
 // partly right and partly 1-2 m off (the tall building's east wall in the block: the
 // upper half on the wall, the lower half in front of it with a ledge between) is beyond
-// the reach of the search along each vertex's own normal (engine/normal_search.h) and of
+// the reach of the search along each vertex's own normal (engine/search/normal_search.h) and of
 // least-squares matching. Its good part, though, already lies on the right plane. As in
 // PatchMatch stereo, every vertex tries the planes of its neighbours whose images agree
 // well there (a neighbour's tangent plane, or a face whose three corners agree): it goes

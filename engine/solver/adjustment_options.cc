@@ -81,8 +81,6 @@ void AdjustmentOptions::Check() const {
   if (!(reject_k >= 0.0)) fail("reject_k must be >= 0");
   if (robust_k > 0.0 && reject_k > 0.0 && reject_k < robust_k) fail("reject_k must be >= robust_k");
   if (!(silhouette_weight >= 0.0)) fail("silhouette_weight must be >= 0");
-  if (!(plumb_weight >= 0.0)) fail("plumb_weight must be >= 0");
-  if (!(plumb_gate_deg > 0.0 && plumb_gate_deg < 60.0)) fail("plumb_gate_deg must be in (0, 60)");
   if (!(silhouette_rim_cos >= 0.0 && silhouette_rim_cos <= 1.0)) fail("silhouette_rim_cos must lie in [0, 1]");
   if (!(silhouette_outside_px >= 0.0)) fail("silhouette_outside_px must be >= 0");
   if (!(silhouette_inside_px >= 0.0)) fail("silhouette_inside_px must be >= 0");

@@ -30,7 +30,7 @@ RadiometricModel RadiometricModelFromName(const std::string& name);  // none|con
 std::string RegularisationName(Regularisation r);
 std::string RadiometricModelName(RadiometricModel m);
 
-// Direction in which the vertices move (issue 7): along their normals (3D: walls can
+// Direction in which the vertices move: along their normals (3D: walls can
 // stand up and overhang) or vertically only (a 2.5D height field, for comparison).
 enum class Displacement { kNormal, kVertical };
 Displacement DisplacementFromName(const std::string& name);  // normal|vertical
@@ -90,23 +90,6 @@ struct AdjustmentOptions {
   // curvature regularisation keeps a ridge round until it is a crease. Off for closed
   // starts, whose coarse facets bend by 10-20 degrees everywhere.
   bool rounded_ridges = true;
-  // Crease vertices get no curvature pseudo-observation across the crease; with this
-  // they get one per sector ("flat on the roof side, flat on the wall side"), so a
-  // wall whose vertices crumpled into creases is still smoothed (issue 7).
-  bool sector_regularisation = false;
-
-  // Plumb walls (issue 9, a prior for built-up areas): every face standing within
-  // plumb_gate_deg of vertical gets one pseudo-observation "its unit normal's z = 0"
-  // (the face stands plumb; an angle in radians for small tilts), tapered to nothing at
-  // the gate ((1 - (n_z / sin gate)^2)^2, so a face does not jump in and out of the prior
-  // between iterations). Roofs (pitch up to 70 degrees: 20 from vertical) and terrain are
-  // left alone below the gate; the images still decide where the wall stands, only its
-  // tilt is drawn towards vertical. Weight per face in the units of lambda (pixel
-  // observations of weight 1), scaled by the face's share of a vertex's pixels (half).
-  // 0 = off.
-  double plumb_weight = 0.0;
-  double plumb_gate_deg = 15.0;
-  bool plumb_corner_gate = true;  // the gate also on the face's corner normals
 
   // Rays at |cos incidence| below this are no observation.
   double min_cos_incidence = 0.1;
@@ -123,7 +106,7 @@ struct AdjustmentOptions {
   // rejected (no observation). 0 = off (each on its own).
   double robust_k = 0.0;
   double reject_k = 0.0;
-  // Silhouette term (objects before a dark background, issue 9): for every free vertex
+  // Silhouette term (objects before a dark background): for every free vertex
   // on a rim of an image that has a silhouette (LevelImage::silhouette), i.e. seen
   // edge-on (|normal . ray| <= silhouette_rim_cos) and not hidden, one observation
   // "signed distance of the vertex's projection to the image's foreground outline = 0",

@@ -30,6 +30,9 @@
 
 namespace facets {
 
+struct FacetState;
+struct PixelRay;
+
 enum VertexFlag : uint8_t {
   kVertexOk = 0,
   kVertexFewViews = 1,     // seen by fewer than AdjustmentOptions::min_views images
@@ -55,7 +58,6 @@ struct IterationReport {
   // pixel outside the outline (on background).
   long long silhouette = 0;
   long long silhouette_outside = 0;
-  long long plumb = 0;  // faces with a plumb pseudo-observation (AdjustmentOptions::plumb_weight)
   double max_dn_interior = 0.0;  // object units
   double max_dn_border = 0.0;
   double max_dn_corner = 0.0;
@@ -87,13 +89,12 @@ struct WindowReport {
   long long downweighted = 0;
   long long silhouette = 0;  // rim observations (AdjustmentOptions::silhouette_weight), last iteration
   long long silhouette_outside = 0;  // of them more than a level pixel outside the outline
-  long long plumb = 0;  // faces with a plumb pseudo-observation (AdjustmentOptions::plumb_weight), last iteration
   int unknowns = 0;
   long long redundancy = 0;
   int cg_iterations_total = 0;
   int crease_edges = 0;
   // Windows whose second run with the sharpened creases fitted worse and was dropped
-  // (engine/level_windows.cc); its iterations are not in `iterations`.
+  // (engine/pipeline/level_windows.cc); its iterations are not in `iterations`.
   int crease_passes_dropped = 0;
   int crease_pass_iterations_dropped = 0;
   double seconds_total = 0.0;
@@ -146,8 +147,36 @@ class WindowAdjustment {
   const std::vector<double>& grey() const { return grey_; }
 
  private:
+  // One share of the sums of the normal equations (window_normal_equations.cc).
+  struct Share;
+  // The normal equations of one iteration as far as the solve and sigma0 need them.
+  struct Linearisation {
+    Eigen::VectorXd rhs;
+    double lpl = 0.0;  // l'Pl of the observations and pseudo-observations
+    long long count = 0;   // pixel observations
+    long long pseudo = 0;  // curvature and silhouette pseudo-observations
+    int determined = 0;    // unknowns determined beyond the ridge (AddRidge)
+  };
+
   // AdjustmentOptions::stall_iterations: sigma0 flat and displacements not shrinking.
   bool Stalled(const std::vector<IterationReport>& iterations) const;
+  // Creases, tessellation, Embree scene, topology tables and N's pattern of one Run.
+  void PrepareRun(WindowReport* report);
+  // Casts the pixels and assembles N (normal_) and the right-hand side.
+  Linearisation LineariseIteration(int iteration, std::vector<std::vector<PixelObservation>>* casts,
+                                   IterationReport* it);
+  Eigen::VectorXd SolveNormalEquations(const Eigen::VectorXd& rhs, IterationReport* it);
+  // Moves the vertices, grey values and radiometry by the solution; returns the factor
+  // the steps were scaled by (AdjustmentOptions::max_step; 1 = unscaled).
+  double UpdateUnknowns(const Eigen::VectorXd& solution, IterationReport* it);
+  // Views, residual correlation, precision and flags of the last iteration.
+  void FinishReport(const std::vector<std::vector<PixelObservation>>& casts, WindowReport* report);
+  void ComputePrecision(const std::vector<std::vector<PixelObservation>>& casts, WindowReport* report);
+  // Sigma of the vertices few images see from N without the pseudo-observations, where
+  // that is larger than the formal one (q: diagonal of the full N^-1).
+  void SigmaFromDataAlone(const std::vector<std::vector<PixelObservation>>& casts,
+                          const std::vector<int>& few_view, const std::vector<int>& few_unknowns,
+                          const Eigen::VectorXd& q, WindowReport* report);
   void BuildTopologyTables();
   void BuildPattern();
   // Returns the observations; *rays: how many pixel rays were cast.
@@ -161,12 +190,23 @@ class WindowAdjustment {
   // the same image, and the variance factor they imply (AdjustmentOptions::correlated_residuals).
   static constexpr int kMaxCorrelationLag = 4;
   CorrelatedResiduals ResidualCorrelation(const std::vector<std::vector<PixelObservation>>& casts) const;
+  // Linearises every pixel observation into N and *rhs; returns l'Pl.
   double Accumulate(const std::vector<std::vector<PixelObservation>>& casts,
                     Eigen::VectorXd* rhs, long long* count);
+  // Image k's observations [first, last) into *share; terms: per observation, residual and
+  // displacement coefficient summed over the channels.
+  void AccumulateRun(size_t k, const PixelRays& rays, const std::vector<PixelObservation>& observations,
+                     size_t first, size_t last, std::array<float, 2>* terms, Share* share) const;
+  // Channel c of one observation; local: slots of its 6 unknowns among the face's 18.
+  void AccumulatePixel(size_t k, int c, const PixelObservation& obs, const PixelRay& ray,
+                       const FacetState& facet, const std::array<int, 6>& local,
+                       std::array<float, 2>* term, Share* share) const;
+  // The radiometric unknowns' rows and columns of one observation (weight w, residual l).
+  void AccumulateRadiometry(const std::array<int, 2>& rad_unknown, const int unknown[6], const double a[6],
+                            const double a_rad[2], double w, double l, Share* share) const;
+  // Sums the shares, in their order, into N and *rhs; returns l'Pl.
+  double ReduceShares(const std::vector<Share>& shares, Eigen::VectorXd* rhs, long long* count);
   double AccumulateCurvature(Eigen::VectorXd* rhs, long long* count);
-  // AdjustmentOptions::plumb_weight: "unit normal's z = 0" for the faces within the
-  // gate of vertical; *count: how many faces got one.
-  double AccumulatePlumb(Eigen::VectorXd* rhs, long long* count);
   // AdjustmentOptions::silhouette_weight: rim observations of the free vertices.
   double AccumulateSilhouette(Eigen::VectorXd* rhs, long long* count, long long* outside);
   // Adds the ridge to N's diagonal; returns the unknowns determined beyond it.

@@ -93,6 +93,86 @@ bool FitEllipsoid(const std::vector<Eigen::Vector3d>& p, const std::vector<doubl
   return true;
 }
 
+// The start ellipsoid (or sphere) while it is fitted to the tie points.
+struct StartShape {
+  const std::vector<Eigen::Vector3d>& points;
+  double size;  // the first radius: median distance of the points to the centre guess
+  Ellipsoid e;
+  bool is_sphere;
+
+  bool Plausible(const Ellipsoid& x) const {
+    return x.radii.maxCoeff() < 4.0 * x.radii.minCoeff() && x.radii.minCoeff() > 0.1 * size &&
+           x.radii.maxCoeff() < 5.0 * size;
+  }
+  // The ellipsoid fitted with weights w when it is plausible, else the sphere (the
+  // shape stays when both fail).
+  void Refit(const std::vector<double>& w) {
+    Ellipsoid next;
+    if (FitEllipsoid(points, w, e.centre, &next) && Plausible(next)) {
+      e = next;
+      is_sphere = false;
+      return;
+    }
+    Eigen::Vector3d c;
+    double r = 0.0;
+    if (FitSphere(points, w, e.centre, &c, &r)) {
+      e.centre = c;
+      e.axes.setIdentity();
+      e.radii = Eigen::Vector3d::Constant(r);
+      is_sphere = true;
+    }
+  }
+};
+
+// Fits to the half of the points closest to the current surface (concentration steps
+// of least trimmed squares): up to half of the points may be floor or background;
+// re-weighting all points instead lets the fit drift onto the floor.
+void ConcentrateOnClosestHalf(StartShape* shape) {
+  const std::vector<Eigen::Vector3d>& points = shape->points;
+  const size_t n = points.size();
+  const size_t half = (n + 1) / 2;
+  std::vector<double> r(n), w(n);
+  std::vector<size_t> order(n), previous;
+  for (int iteration = 0; iteration < 50; ++iteration) {
+    for (size_t i = 0; i < n; ++i) r[i] = std::abs(RadialDistance(shape->e, points[i]));
+    for (size_t i = 0; i < n; ++i) order[i] = i;
+    std::nth_element(order.begin(), order.begin() + half, order.end(),
+                     [&](size_t a, size_t b) { return r[a] < r[b]; });
+    std::vector<size_t> subset(order.begin(), order.begin() + half);
+    std::sort(subset.begin(), subset.end());
+    if (subset == previous) break;
+    previous = subset;
+    std::fill(w.begin(), w.end(), 0.0);
+    for (size_t i : subset) w[i] = 1.0;
+    shape->Refit(w);
+  }
+}
+
+// Scale from the closest quarter of all points (a quantile of the inliers' residuals
+// as long as at least half are inliers: over-estimates sigma at most 2x), then Tukey
+// weights and a re-fit, the scale re-estimated from the inliers only. Returns the scale
+// (m); *r: the points' radial distances to the final shape.
+double TukeyRefit(StartShape* shape, std::vector<double>* r) {
+  const std::vector<Eigen::Vector3d>& points = shape->points;
+  const size_t n = points.size();
+  for (size_t i = 0; i < n; ++i) (*r)[i] = std::abs(RadialDistance(shape->e, points[i]));
+  std::vector<double> sorted = *r;
+  std::nth_element(sorted.begin(), sorted.begin() + n / 4, sorted.end());
+  double s = std::max(sorted[n / 4] / 0.3186, 1e-4 * shape->size);
+  std::vector<double> w(n);
+  for (int iteration = 0; iteration < 5; ++iteration) {
+    for (size_t i = 0; i < n; ++i) w[i] = TukeyWeight((*r)[i], s);
+    shape->Refit(w);
+    std::vector<double> inlier;
+    for (size_t i = 0; i < n; ++i) {
+      (*r)[i] = std::abs(RadialDistance(shape->e, points[i]));
+      if (w[i] > 0.0) inlier.push_back((*r)[i]);
+    }
+    s = std::max(1.4826 * Median(inlier), 1e-4 * shape->size);
+  }
+  return s;
+}
+
 TinMesh Scaled(const TinMesh& start, const Eigen::Vector3d& centre, double scale) {
   TinMesh mesh = start;
   for (auto vh : mesh.vertices()) {
@@ -100,6 +180,95 @@ TinMesh Scaled(const TinMesh& start, const Eigen::Vector3d& centre, double scale
   }
   UpdateVertexNormals(&mesh);
   return mesh;
+}
+
+// The closed start before lifting: the visual hull, the given mesh or the hull of the
+// inlier tie points remeshed to edge_length, else the fitted ellipsoid.
+TinMesh UnliftedClosedMesh(const ClosedStart& start, const ClosedStartOptions& options, double edge_length) {
+  TinMesh mesh;
+  if (start.visual_hull) {
+    std::vector<Eigen::Vector3d> points;
+    std::vector<Eigen::Vector3i> triangles;
+    MeshVisualHull(*start.visual_hull, edge_length, &points, &triangles);
+    mesh = TinFromTriangles(points, triangles, "visual hull");
+    QualityOptions quality;
+    quality.target_edge_length = edge_length;
+    QualityPass(&mesh, quality);
+    UpdateVertexNormals(&mesh);
+  } else if (start.given) {
+    mesh = *start.given;
+    QualityOptions quality;
+    quality.target_edge_length = edge_length;
+    QualityPass(&mesh, quality);
+    UpdateVertexNormals(&mesh);
+  } else if (!start.hull_points.empty()) {
+    mesh = MakeHullMesh(start.hull_points, start.centre, edge_length, options.hull_inflate);
+    QualityOptions quality;  // flat hull faces stretch the sphere's edges
+    quality.target_edge_length = edge_length;
+    QualityPass(&mesh, quality);
+    UpdateVertexNormals(&mesh);
+  } else {
+    mesh = MakeEllipsoidMesh(start.fit->ellipsoid, edge_length);
+  }
+  return mesh;
+}
+
+// One scale of object lifting: sigma0 1e300 when no image sees the scaled start.
+struct ScaleTrial {
+  double scale, sigma0, mean_dn, scale_correction;
+};
+
+// One adjustment iteration of the start scaled by `scale` about `centre`: its sigma0,
+// the mean normal displacement (m) and the median scale change the displacements ask for.
+ScaleTrial TryScale(const TinMesh& mesh, const Eigen::Vector3d& centre, double scale,
+                    const std::vector<LevelImage>& images, const AdjustmentOptions& one, LiftingTrial* trial) {
+  TinMesh trial_mesh = Scaled(mesh, centre, scale);
+  const TinMesh before = trial_mesh;
+  trial->height = scale;
+  double correction = 0.0;
+  try {
+    AdjustmentOptions single = one;
+    single.max_iterations = 1;
+    single.compute_precision = false;
+    WindowAdjustment adjustment(&trial_mesh, images, single);
+    const WindowReport report = adjustment.Run();
+    double sum = 0.0;
+    std::vector<double> corrections;
+    for (auto vh : before.vertices()) {
+      const Eigen::Vector3d n = ToEigen(before.normal(vh));
+      const double dn = (ToEigen(trial_mesh.point(vh)) - ToEigen(before.point(vh))).dot(n);
+      sum += dn;
+      // The scale change that moves this vertex by dn along its normal.
+      const Eigen::Vector3d radial = ToEigen(mesh.point(vh)) - centre;
+      const double along = n.dot(radial);
+      if (along > 0.2 * radial.norm()) corrections.push_back(dn / along);
+    }
+    trial->sigma0 = report.sigma0;
+    trial->mean_dn = sum / before.n_vertices();
+    trial->observations = report.observations;
+    correction = Median(corrections);
+  } catch (const std::runtime_error&) {
+    trial->sigma0 = 1e300;  // no image sees this start: not a candidate
+  }
+  return {scale, trial->sigma0, trial->mean_dn, correction};
+}
+
+// The truth lies where the surface stops growing and starts shrinking; of such a pair
+// the better fitting trial, else the best fitting trial overall (-1: none seen).
+int BestScale(const std::vector<ScaleTrial>& tried) {
+  int best = -1;
+  for (size_t k = 0; k + 1 < tried.size(); ++k) {
+    if (tried[k].sigma0 >= 1e300 || tried[k + 1].sigma0 >= 1e300) continue;
+    if (!(tried[k].mean_dn > 0.0 && tried[k + 1].mean_dn < 0.0)) continue;
+    const int better = tried[k].sigma0 <= tried[k + 1].sigma0 ? static_cast<int>(k) : static_cast<int>(k + 1);
+    if (best < 0 || tried[better].sigma0 < tried[best].sigma0) best = better;
+  }
+  if (best < 0) {
+    for (size_t k = 0; k < tried.size(); ++k) {
+      if (tried[k].sigma0 < 1e300 && (best < 0 || tried[k].sigma0 < tried[best].sigma0)) best = static_cast<int>(k);
+    }
+  }
+  return best;
 }
 
 // Vertex positions and normals, by vertex index.
@@ -148,69 +317,15 @@ EllipsoidFit FitStartEllipsoid(const std::vector<Eigen::Vector3d>& points,
   fit.points = static_cast<int>(n);
   std::vector<double> distance(n);
   for (size_t i = 0; i < n; ++i) distance[i] = (points[i] - centre_guess).norm();
-  Ellipsoid e;
-  e.centre = centre_guess;
-  e.radii = Eigen::Vector3d::Constant(Median(distance));
-  const double size = e.radii.x();
-  bool is_sphere = true;
-  // Fits to the half of the points closest to the current surface (concentration steps
-  // of least trimmed squares): up to half of the points may be floor or background;
-  // re-weighting all points instead lets the fit drift onto the floor.
-  auto plausible = [&](const Ellipsoid& x) {
-    return x.radii.maxCoeff() < 4.0 * x.radii.minCoeff() && x.radii.minCoeff() > 0.1 * size &&
-           x.radii.maxCoeff() < 5.0 * size;
-  };
-  auto refit = [&](const std::vector<double>& w) {
-    Ellipsoid next;
-    if (FitEllipsoid(points, w, e.centre, &next) && plausible(next)) {
-      e = next;
-      is_sphere = false;
-      return;
-    }
-    Eigen::Vector3d c;
-    double r = 0.0;
-    if (FitSphere(points, w, e.centre, &c, &r)) {
-      e.centre = c;
-      e.axes.setIdentity();
-      e.radii = Eigen::Vector3d::Constant(r);
-      is_sphere = true;
-    }
-  };
-  const size_t half = (n + 1) / 2;
-  std::vector<double> r(n), w(n);
-  std::vector<size_t> order(n), previous;
-  for (int iteration = 0; iteration < 50; ++iteration) {
-    for (size_t i = 0; i < n; ++i) r[i] = std::abs(RadialDistance(e, points[i]));
-    for (size_t i = 0; i < n; ++i) order[i] = i;
-    std::nth_element(order.begin(), order.begin() + half, order.end(),
-                     [&](size_t a, size_t b) { return r[a] < r[b]; });
-    std::vector<size_t> subset(order.begin(), order.begin() + half);
-    std::sort(subset.begin(), subset.end());
-    if (subset == previous) break;
-    previous = subset;
-    std::fill(w.begin(), w.end(), 0.0);
-    for (size_t i : subset) w[i] = 1.0;
-    refit(w);
-  }
-  // Scale from the closest quarter of all points (a quantile of the inliers' residuals
-  // as long as at least half are inliers: over-estimates sigma at most 2x), then Tukey
-  // weights and a re-fit, the scale re-estimated from the inliers only.
-  for (size_t i = 0; i < n; ++i) r[i] = std::abs(RadialDistance(e, points[i]));
-  std::vector<double> sorted = r;
-  std::nth_element(sorted.begin(), sorted.begin() + n / 4, sorted.end());
-  double s = std::max(sorted[n / 4] / 0.3186, 1e-4 * size);
-  for (int iteration = 0; iteration < 5; ++iteration) {
-    for (size_t i = 0; i < n; ++i) w[i] = TukeyWeight(r[i], s);
-    refit(w);
-    std::vector<double> inlier;
-    for (size_t i = 0; i < n; ++i) {
-      r[i] = std::abs(RadialDistance(e, points[i]));
-      if (w[i] > 0.0) inlier.push_back(r[i]);
-    }
-    s = std::max(1.4826 * Median(inlier), 1e-4 * size);
-  }
-  fit.ellipsoid = e;
-  fit.is_sphere = is_sphere;
+  StartShape shape{points, 0.0, Ellipsoid{}, true};
+  shape.e.centre = centre_guess;
+  shape.e.radii = Eigen::Vector3d::Constant(Median(distance));
+  shape.size = shape.e.radii.x();
+  ConcentrateOnClosestHalf(&shape);
+  std::vector<double> r(n);
+  const double s = TukeyRefit(&shape, &r);
+  fit.ellipsoid = shape.e;
+  fit.is_sphere = shape.is_sphere;
   double sum = 0.0;
   for (size_t i = 0; i < n; ++i) {
     if (TukeyWeight(r[i], s) <= 0.0) continue;
@@ -342,31 +457,7 @@ TinMesh MakeClosedStartMesh(const ClosedStart& start, const ClosedStartOptions& 
                             const AdjustmentOptions& one, std::vector<LiftingTrial>* trials,
                             const std::function<void(const std::string&)>& say) {
   options.Check();
-  TinMesh mesh;
-  if (start.visual_hull) {
-    std::vector<Eigen::Vector3d> points;
-    std::vector<Eigen::Vector3i> triangles;
-    MeshVisualHull(*start.visual_hull, edge_length, &points, &triangles);
-    mesh = TinFromTriangles(points, triangles, "visual hull");
-    QualityOptions quality;
-    quality.target_edge_length = edge_length;
-    QualityPass(&mesh, quality);
-    UpdateVertexNormals(&mesh);
-  } else if (start.given) {
-    mesh = *start.given;
-    QualityOptions quality;
-    quality.target_edge_length = edge_length;
-    QualityPass(&mesh, quality);
-    UpdateVertexNormals(&mesh);
-  } else if (!start.hull_points.empty()) {
-    mesh = MakeHullMesh(start.hull_points, start.centre, edge_length, options.hull_inflate);
-    QualityOptions quality;  // flat hull faces stretch the sphere's edges
-    quality.target_edge_length = edge_length;
-    QualityPass(&mesh, quality);
-    UpdateVertexNormals(&mesh);
-  } else {
-    mesh = MakeEllipsoidMesh(start.fit->ellipsoid, edge_length);
-  }
+  const TinMesh mesh = UnliftedClosedMesh(start, options, edge_length);
   auto finish = [&](TinMesh result) {
     if (!options.write_start.empty()) {
       MeshData data;
@@ -375,66 +466,22 @@ TinMesh MakeClosedStartMesh(const ClosedStart& start, const ClosedStartOptions& 
     }
     return result;
   };
-  if (options.lifting_steps == 0) return finish(std::move(mesh));
+  if (options.lifting_steps == 0) return finish(mesh);
 
   // Object lifting along the normals: one iteration per scale factor.
-  struct Trial {
-    double scale, sigma0, mean_dn, scale_correction;
-  };
-  std::vector<Trial> tried;
+  std::vector<ScaleTrial> tried;
   for (int k = 0; k < options.lifting_steps; ++k) {
     const double scale = 1.0 - 0.5 * options.lifting_range +
                          options.lifting_range * (options.lifting_steps == 1 ? 0.5 : k / (options.lifting_steps - 1.0));
-    TinMesh trial_mesh = Scaled(mesh, start.centre, scale);
-    const TinMesh before = trial_mesh;
     LiftingTrial trial;
-    trial.height = scale;
-    double correction = 0.0;
-    try {
-      AdjustmentOptions single = one;
-      single.max_iterations = 1;
-      single.compute_precision = false;
-      WindowAdjustment adjustment(&trial_mesh, images, single);
-      const WindowReport report = adjustment.Run();
-      double sum = 0.0;
-      std::vector<double> corrections;
-      for (auto vh : before.vertices()) {
-        const Eigen::Vector3d n = ToEigen(before.normal(vh));
-        const double dn = (ToEigen(trial_mesh.point(vh)) - ToEigen(before.point(vh))).dot(n);
-        sum += dn;
-        // The scale change that moves this vertex by dn along its normal.
-        const Eigen::Vector3d radial = ToEigen(mesh.point(vh)) - start.centre;
-        const double along = n.dot(radial);
-        if (along > 0.2 * radial.norm()) corrections.push_back(dn / along);
-      }
-      trial.sigma0 = report.sigma0;
-      trial.mean_dn = sum / before.n_vertices();
-      trial.observations = report.observations;
-      correction = Median(corrections);
-    } catch (const std::runtime_error&) {
-      trial.sigma0 = 1e300;  // no image sees this start: not a candidate
-    }
+    tried.push_back(TryScale(mesh, start.centre, scale, images, one, &trial));
     if (trials) trials->push_back(trial);
-    tried.push_back({scale, trial.sigma0, trial.mean_dn, correction});
     if (say) {
       say("  lifting scale " + std::to_string(scale) + ": sigma0 " + std::to_string(trial.sigma0) +
           ", mean displacement " + std::to_string(trial.mean_dn) + " m");
     }
   }
-  // The truth lies where the surface stops growing and starts shrinking; of such a
-  // pair take the better fitting trial, else the best fitting trial overall.
-  int best = -1;
-  for (size_t k = 0; k + 1 < tried.size(); ++k) {
-    if (tried[k].sigma0 >= 1e300 || tried[k + 1].sigma0 >= 1e300) continue;
-    if (!(tried[k].mean_dn > 0.0 && tried[k + 1].mean_dn < 0.0)) continue;
-    const int better = tried[k].sigma0 <= tried[k + 1].sigma0 ? static_cast<int>(k) : static_cast<int>(k + 1);
-    if (best < 0 || tried[better].sigma0 < tried[best].sigma0) best = better;
-  }
-  if (best < 0) {
-    for (size_t k = 0; k < tried.size(); ++k) {
-      if (tried[k].sigma0 < 1e300 && (best < 0 || tried[k].sigma0 < tried[best].sigma0)) best = static_cast<int>(k);
-    }
-  }
+  const int best = BestScale(tried);
   if (best < 0) throw std::runtime_error("object lifting: no scale of the closed start is seen by any image");
   const double scale = std::max(0.1, tried[best].scale + tried[best].scale_correction);
   if (say) say("  lifting: closed start scaled by " + std::to_string(scale));

@@ -1,4 +1,4 @@
-// Closed start surfaces for objects photographed from all around (issue 9): instead of
+// Closed start surfaces for objects photographed from all around: instead of
 // the 2.5D start plane, a closed TIN around the object, refined by the same engine.
 //
 // - Given: a start mesh file (PLY/OBJ, io/ply_io.h), used as it is; edges longer than
@@ -79,7 +79,7 @@ struct ClosedStartOptions {
   // the object touches its hull along the rims, and nothing else pulls the outline out.
   // Off by default: it raises the silhouette IoU (temple median 0.896 -> 0.906) but holds
   // the surface to the hull between the views' rims, after the finest level's last
-  // adjustment (synthetic blob: object median 0.05 -> 0.27 GSD; docs/EXPERIMENTS.md).
+  // adjustment (synthetic blob: object median 0.05 -> 0.27 GSD).
   bool hull_rims = false;
   // Voxel edge of the hull these constraints use (0 = the start's hull): a finer hull
   // keeps thin parts the start's 3x3x3-blurred voxels erode, without the mesher

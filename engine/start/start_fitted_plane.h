@@ -1,5 +1,5 @@
 // A start plane of any orientation, fitted to the tie points by robust total least
-// squares (issue 9: a facade seen from the street is far from the horizontal start
+// squares (a facade seen from the street is far from the horizontal start
 // plane the engine uses for aerial blocks).
 //
 // The fit: the plane through the centroid with the normal of the smallest eigenvalue

@@ -5,6 +5,7 @@
 #include <array>
 #include <random>
 #include <cmath>
+#include <functional>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -105,6 +106,74 @@ class PointBuckets {
   std::unordered_map<long long, std::vector<int>> cells_;
 };
 
+// Triples of n points to fit planes through: all of them for small neighbourhoods, else
+// a fixed pseudo-random set (deterministic: the same points give the same start).
+std::vector<std::array<int, 3>> ConsensusTriples(int n) {
+  std::vector<std::array<int, 3>> triples;
+  if (n <= 14) {
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j)
+        for (int k = j + 1; k < n; ++k) triples.push_back({i, j, k});
+  } else {
+    std::mt19937 rng(12345u + static_cast<unsigned>(n));
+    std::uniform_int_distribution<int> pick(0, n - 1);
+    while (triples.size() < 400) {
+      const int i = pick(rng), j = pick(rng), k = pick(rng);
+      if (i != j && j != k && i != k) triples.push_back({i, j, k});
+    }
+  }
+  return triples;
+}
+
+// Flags the points within the consensus tolerance of a plane z = a + b x + c y; returns
+// how many.
+using InliersOf = std::function<int(const Eigen::Vector3d& plane, std::vector<bool>* use)>;
+
+// Of the planes through the triples (points relative to the node), the one with at least
+// min_inliers agreeing points whose agreeing points weigh most (weights
+// exp(-d^2 / weight_radius^2)); returns its inlier count (0: none), *plane and *use.
+int BestConsensusPlane(const std::vector<Eigen::Vector3d>& local, const InliersOf& inliers_of, int min_inliers,
+                       double weight_radius, Eigen::Vector3d* best_plane, std::vector<bool>* best_use) {
+  const int n = static_cast<int>(local.size());
+  std::vector<bool> use(n);
+  // Score: inliers weighted by closeness to the node, so a small roof under the node
+  // outweighs more ground points further out.
+  std::vector<double> weight(n);
+  const double r0 = weight_radius;
+  for (int i = 0; i < n; ++i) weight[i] = std::exp(-local[i].head<2>().squaredNorm() / (r0 * r0));
+  double best_score = 0.0;
+  int best = 0;
+  for (const auto& t : ConsensusTriples(n)) {
+    Eigen::Matrix3d a;
+    Eigen::Vector3d b;
+    for (int r = 0; r < 3; ++r) {
+      a.row(r) << 1.0, local[t[r]].x(), local[t[r]].y();
+      b[r] = local[t[r]].z();
+    }
+    // Nearly collinear triples give arbitrary tilts: skip them.
+    const double area = std::abs((local[t[1]] - local[t[0]]).head<2>().homogeneous().cross(
+                                     (local[t[2]] - local[t[0]]).head<2>().homogeneous())[2]);
+    const double span = std::max({(local[t[1]] - local[t[0]]).head<2>().squaredNorm(),
+                                  (local[t[2]] - local[t[0]]).head<2>().squaredNorm(),
+                                  (local[t[2]] - local[t[1]]).head<2>().squaredNorm()});
+    if (area < 0.05 * span) continue;
+    const Eigen::Vector3d plane = a.lu().solve(b);
+    // Steeper than 45 degrees: a wall between ground and roof points, not a surface.
+    if (plane.tail<2>().norm() > 1.0) continue;
+    const int kept = inliers_of(plane, &use);
+    if (kept < min_inliers) continue;
+    double score = 0.0;
+    for (int i = 0; i < n; ++i) score += use[i] ? weight[i] : 0.0;
+    if (score > best_score) {
+      best_score = score;
+      best = kept;
+      *best_plane = plane;
+      *best_use = use;
+    }
+  }
+  return best;
+}
+
 // Height at (x, y) of the local plane with the best consensus: planes through
 // triples of the neighbourhood's points, each scored by the points within
 // consensus_tolerance; the best one refitted by least squares to its inliers (twice).
@@ -125,7 +194,7 @@ std::optional<double> LocalRobustHeight(const std::vector<Eigen::Vector3d>& near
   std::vector<Eigen::Vector3d> local;
   for (const auto& p : near) local.emplace_back(p.x() - x, p.y() - y, p.z());
   const double tolerance = options.consensus_tolerance;
-  auto inliers_of = [&](const Eigen::Vector3d& plane, std::vector<bool>* use) {
+  const InliersOf inliers_of = [&](const Eigen::Vector3d& plane, std::vector<bool>* use) {
     int kept = 0;
     for (int i = 0; i < n; ++i) {
       (*use)[i] = std::abs(local[i].z() - plane.dot(Eigen::Vector3d(1, local[i].x(), local[i].y()))) <= tolerance;
@@ -133,58 +202,9 @@ std::optional<double> LocalRobustHeight(const std::vector<Eigen::Vector3d>& near
     }
     return kept;
   };
-  // Triples: all of them for small neighbourhoods, else a fixed pseudo-random set
-  // (deterministic: the same points give the same start).
-  std::vector<std::array<int, 3>> triples;
-  if (n <= 14) {
-    for (int i = 0; i < n; ++i)
-      for (int j = i + 1; j < n; ++j)
-        for (int k = j + 1; k < n; ++k) triples.push_back({i, j, k});
-  } else {
-    std::mt19937 rng(12345u + static_cast<unsigned>(n));
-    std::uniform_int_distribution<int> pick(0, n - 1);
-    while (triples.size() < 400) {
-      const int i = pick(rng), j = pick(rng), k = pick(rng);
-      if (i != j && j != k && i != k) triples.push_back({i, j, k});
-    }
-  }
-  std::vector<bool> use(n), best_use(n);
-  // Score: inliers weighted by closeness to the node, so a small roof under the node
-  // outweighs more ground points further out.
-  std::vector<double> weight(n);
-  const double r0 = weight_radius;
-  for (int i = 0; i < n; ++i) weight[i] = std::exp(-local[i].head<2>().squaredNorm() / (r0 * r0));
-  double best_score = 0.0;
-  int best = 0;
+  std::vector<bool> best_use(n);
   Eigen::Vector3d best_plane = Eigen::Vector3d::Zero();
-  for (const auto& t : triples) {
-    Eigen::Matrix3d a;
-    Eigen::Vector3d b;
-    for (int r = 0; r < 3; ++r) {
-      a.row(r) << 1.0, local[t[r]].x(), local[t[r]].y();
-      b[r] = local[t[r]].z();
-    }
-    // Nearly collinear triples give arbitrary tilts: skip them.
-    const double area = std::abs((local[t[1]] - local[t[0]]).head<2>().homogeneous().cross(
-                                     (local[t[2]] - local[t[0]]).head<2>().homogeneous())[2]);
-    const double span = std::max({(local[t[1]] - local[t[0]]).head<2>().squaredNorm(),
-                                  (local[t[2]] - local[t[0]]).head<2>().squaredNorm(),
-                                  (local[t[2]] - local[t[1]]).head<2>().squaredNorm()});
-    if (area < 0.05 * span) continue;
-    const Eigen::Vector3d plane = a.lu().solve(b);
-    // Steeper than 45 degrees: a wall between ground and roof points, not a surface.
-    if (plane.tail<2>().norm() > 1.0) continue;
-    const int kept = inliers_of(plane, &use);
-    if (kept < options.min_inliers) continue;
-    double score = 0.0;
-    for (int i = 0; i < n; ++i) score += use[i] ? weight[i] : 0.0;
-    if (score > best_score) {
-      best_score = score;
-      best = kept;
-      best_plane = plane;
-      best_use = use;
-    }
-  }
+  const int best = BestConsensusPlane(local, inliers_of, options.min_inliers, weight_radius, &best_plane, &best_use);
   if (best < options.min_inliers) return std::nullopt;
   for (int round = 0; round < 2; ++round) {
     const Eigen::Vector3d refit = FitPlaneZ(local, best_use);
@@ -201,6 +221,69 @@ std::optional<double> LocalRobustHeight(const std::vector<Eigen::Vector3d>& near
   }
   *offset = (centroid / kept).norm();
   return best_plane[0];
+}
+
+// The height at node (x, y) from the tie points around it: the consensus plane of the
+// smallest neighbourhood (radius_nodes node steps, doubled up to max_radius_nodes) that
+// has one with its agreeing points around the node; empty when none has.
+std::optional<double> NodeHeightFromPoints(const PointBuckets& buckets, double x, double y, double step,
+                                           double weight_radius, const TiePointStartOptions& options) {
+  for (double radius = options.radius_nodes * step; radius <= options.max_radius_nodes * step * 1.0001;
+       radius *= 2) {
+    std::vector<Eigen::Vector3d> near = buckets.PointsNear(x, y, radius);
+    // Dense tie points (a full COLMAP model): the nearest kMaxNeighbours suffice and
+    // keep the consensus search bounded per node.
+    constexpr size_t kMaxNeighbours = 64;
+    if (near.size() > kMaxNeighbours) {
+      auto closer = [x, y](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+        return std::hypot(a.x() - x, a.y() - y) < std::hypot(b.x() - x, b.y() - y);
+      };
+      std::nth_element(near.begin(), near.begin() + kMaxNeighbours, near.end(), closer);
+      near.resize(kMaxNeighbours);
+    }
+    if (static_cast<int>(near.size()) < options.min_points) continue;
+    double offset = 0.0;
+    const std::optional<double> fitted = LocalRobustHeight(near, x, y, options, weight_radius, &offset);
+    if (!fitted) continue;
+    // All agreeing points off to one side (the edge of a hole): the plane would be
+    // extrapolated; a larger neighbourhood may take the other side in, else the node
+    // takes the robust plane. (At the region's border a half disc puts the centroid
+    // at 0.42 radius, a quarter disc at 0.6.)
+    if (offset > 0.7 * radius) continue;
+    return fitted;
+  }
+  return std::nullopt;
+}
+
+// One smoothing pass: each node's deviation from the robust plane halfway to the mean
+// deviation of its (up to 4) grid neighbours. Smoothing the deviation keeps a plane
+// exact, also at the border where the neighbours are one-sided.
+void SmoothDeviations(const Eigen::Vector3d& plane, TiePointHeightGrid* grid) {
+  const Eigen::Vector2d range = grid->max - grid->min;
+  auto plane_at = [&](int i, int j) {
+    return plane.dot(Eigen::Vector3d(1, grid->min.x() + range.x() * i / grid->nx,
+                                     grid->min.y() + range.y() * j / grid->ny));
+  };
+  std::vector<double> next = grid->heights;
+  for (int j = 0; j <= grid->ny; ++j) {
+    for (int i = 0; i <= grid->nx; ++i) {
+      double sum = 0.0;
+      int count = 0;
+      auto add = [&](int a, int b) {
+        if (a < 0 || b < 0 || a > grid->nx || b > grid->ny) return;
+        sum += grid->heights[static_cast<size_t>(b) * (grid->nx + 1) + a] - plane_at(a, b);
+        ++count;
+      };
+      add(i - 1, j);
+      add(i + 1, j);
+      add(i, j - 1);
+      add(i, j + 1);
+      const size_t k = static_cast<size_t>(j) * (grid->nx + 1) + i;
+      const double own = grid->heights[k] - plane_at(i, j);
+      next[k] = plane_at(i, j) + 0.5 * own + 0.5 * sum / count;
+    }
+  }
+  grid->heights.swap(next);
 }
 
 }  // namespace
@@ -297,66 +380,17 @@ TiePointHeightGrid FitTiePointHeights(const std::vector<Eigen::Vector3d>& all_po
       const double y = grid.min.y() + range.y() * j / grid.ny;
       double& z = grid.heights[static_cast<size_t>(j) * (grid.nx + 1) + i];
       z = r.plane.dot(Eigen::Vector3d(1, x, y));
-      for (double radius = options.radius_nodes * step; radius <= options.max_radius_nodes * step * 1.0001;
-           radius *= 2) {
-        std::vector<Eigen::Vector3d> near = buckets.PointsNear(x, y, radius);
-        // Dense tie points (a full COLMAP model): the nearest kMaxNeighbours suffice and
-        // keep the consensus search bounded per node.
-        constexpr size_t kMaxNeighbours = 64;
-        if (near.size() > kMaxNeighbours) {
-          auto closer = [x, y](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-            return std::hypot(a.x() - x, a.y() - y) < std::hypot(b.x() - x, b.y() - y);
-          };
-          std::nth_element(near.begin(), near.begin() + kMaxNeighbours, near.end(), closer);
-          near.resize(kMaxNeighbours);
-        }
-        if (static_cast<int>(near.size()) < options.min_points) continue;
-        double offset = 0.0;
-        const std::optional<double> fitted = LocalRobustHeight(near, x, y, options, weight_radius, &offset);
-        if (!fitted) continue;
-        // All agreeing points off to one side (the edge of a hole): the plane would be
-        // extrapolated; a larger neighbourhood may take the other side in, else the node
-        // takes the robust plane. (At the region's border a half disc puts the centroid
-        // at 0.42 radius, a quarter disc at 0.6.)
-        if (offset > 0.7 * radius) continue;
+      const std::optional<double> fitted = NodeHeightFromPoints(buckets, x, y, step, weight_radius, options);
+      if (fitted) {
         z = *fitted;
         ++r.nodes_from_points;
-        break;
       }
     }
   }
   r.nodes = static_cast<int>(grid.heights.size());
   r.nodes_from_plane = r.nodes - r.nodes_from_points;
 
-  // Smoothing: each node's deviation from the robust plane halfway to the mean deviation
-  // of its (up to 4) grid neighbours. Smoothing the deviation keeps a plane exact, also
-  // at the border where the neighbours are one-sided.
-  auto plane_at = [&](int i, int j) {
-    return r.plane.dot(Eigen::Vector3d(1, grid.min.x() + range.x() * i / grid.nx,
-                                       grid.min.y() + range.y() * j / grid.ny));
-  };
-  for (int pass = 0; pass < options.smoothing_passes; ++pass) {
-    std::vector<double> next = grid.heights;
-    for (int j = 0; j <= grid.ny; ++j) {
-      for (int i = 0; i <= grid.nx; ++i) {
-        double sum = 0.0;
-        int count = 0;
-        auto add = [&](int a, int b) {
-          if (a < 0 || b < 0 || a > grid.nx || b > grid.ny) return;
-          sum += grid.heights[static_cast<size_t>(b) * (grid.nx + 1) + a] - plane_at(a, b);
-          ++count;
-        };
-        add(i - 1, j);
-        add(i + 1, j);
-        add(i, j - 1);
-        add(i, j + 1);
-        const size_t k = static_cast<size_t>(j) * (grid.nx + 1) + i;
-        const double own = grid.heights[k] - plane_at(i, j);
-        next[k] = plane_at(i, j) + 0.5 * own + 0.5 * sum / count;
-      }
-    }
-    grid.heights.swap(next);
-  }
+  for (int pass = 0; pass < options.smoothing_passes; ++pass) SmoothDeviations(r.plane, &grid);
   return grid;
 }
 

@@ -1,4 +1,4 @@
-// Start surface fitted robustly to the tie points (issue 6, DESIGN.md section 5): the
+// Start surface fitted robustly to the tie points (DESIGN.md section 5): the
 // coarsest level's start TIN with heights from the block's sparse points (COLMAP
 // points3D.txt, ImageBlock::points) instead of one plane.
 //

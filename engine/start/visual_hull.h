@@ -1,4 +1,4 @@
-// Visual hull (issue 9): the volume whose every point projects into the object's
+// Visual hull: the volume whose every point projects into the object's
 // silhouette (visibility/silhouette.h) in every image, carved in a voxel grid, and its
 // boundary as a closed triangle mesh: a start for closed objects that, unlike an
 // ellipsoid or the tie points' convex hull, already has the object's outline in every
