@@ -20,6 +20,7 @@
 #include "mesh/local_ops.h"
 #include "mesh/subdivision.h"
 #include "mesh/surface_validity.h"
+#include "refine/crease_lines.h"
 #include "refine/unseen_lips.h"
 #include "refine/wall_corners.h"
 
