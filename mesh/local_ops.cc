@@ -274,6 +274,42 @@ void SmoothingOptions::Check() const {
   if (!(crease_angle_deg > 0.0)) throw std::invalid_argument("SmoothingOptions: crease_angle_deg must be > 0");
 }
 
+namespace {
+
+// The point of the G1 surface (patches, by face) over p + delta: located in the face
+// around v whose projection onto the tangent plane at p (normal n) contains it, with
+// the surface's normal there. False (nothing set) when no such face.
+bool OntoAdjacentPatch(const TinMesh& mesh, const std::vector<G1Patch>& patches, TinMesh::VertexHandle v,
+                       const Eigen::Vector3d& p, const Eigen::Vector3d& n, const Eigen::Vector3d& delta,
+                       Eigen::Vector3d* moved, Eigen::Vector3d* moved_normal) {
+  Eigen::Vector3d e1, e2;
+  PlaneBasis(n, &e1, &e2);
+  for (auto f : mesh.vf_range(v)) {
+    const G1Patch& patch = patches[f.idx()];
+    Vec2 x[3];
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d r = patch.vertex(k) - p;
+      x[k] = Vec2(r.dot(e1), r.dot(e2));
+    }
+    const Vec2 t(delta.dot(e1), delta.dot(e2));
+    const double area = Cross2(x[1] - x[0], x[2] - x[0]);
+    if (std::abs(area) < 1e-300) continue;
+    const double b1 = Cross2(t - x[0], x[2] - x[0]) / area;
+    const double b2 = Cross2(x[1] - x[0], t - x[0]) / area;
+    const double b0 = 1.0 - b1 - b2;
+    const double eps = -1e-12;
+    if (b0 >= eps && b1 >= eps && b2 >= eps) {
+      const SurfacePoint sp = patch.EvaluateWithDerivatives(b1, b2);
+      *moved = sp.point;
+      *moved_normal = sp.normal;
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
 SmoothingReport TangentialSmooth(TinMesh* mesh, const SmoothingOptions& options) {
   options.Check();
   SmoothingReport report;
@@ -309,33 +345,8 @@ SmoothingReport TangentialSmooth(TinMesh* mesh, const SmoothingOptions& options)
       delta -= delta.dot(n) * n;
       const Eigen::Vector3d target = p + delta;
       Eigen::Vector3d moved = target, moved_normal = n;
-      if (options.stay_on_surface) {
-        Eigen::Vector3d e1, e2;
-        PlaneBasis(n, &e1, &e2);
-        bool found = false;
-        for (auto f : mesh->vf_range(v)) {
-          const G1Patch& patch = patches[f.idx()];
-          Vec2 x[3];
-          for (int k = 0; k < 3; ++k) {
-            const Eigen::Vector3d r = patch.vertex(k) - p;
-            x[k] = Vec2(r.dot(e1), r.dot(e2));
-          }
-          const Vec2 t(delta.dot(e1), delta.dot(e2));
-          const double area = Cross2(x[1] - x[0], x[2] - x[0]);
-          if (std::abs(area) < 1e-300) continue;
-          const double b1 = Cross2(t - x[0], x[2] - x[0]) / area;
-          const double b2 = Cross2(x[1] - x[0], t - x[0]) / area;
-          const double b0 = 1.0 - b1 - b2;
-          const double eps = -1e-12;
-          if (b0 >= eps && b1 >= eps && b2 >= eps) {
-            const SurfacePoint sp = patch.EvaluateWithDerivatives(b1, b2);
-            moved = sp.point;
-            moved_normal = sp.normal;
-            found = true;
-            break;
-          }
-        }
-        if (!found) ++report.off_surface;
+      if (options.stay_on_surface && !OntoAdjacentPatch(*mesh, patches, v, p, n, delta, &moved, &moved_normal)) {
+        ++report.off_surface;
       }
       if (!moved.allFinite() || !(moved_normal.norm() > 0.5)) {
         // A degenerate patch (a folded vertex: tangents parallel, no normal): stay.

@@ -259,7 +259,7 @@ std::vector<int> FacesNearRegion(const TinMesh& mesh, const std::vector<bool>& r
 // The free vertices of `region` (not on the border) put where the uniform Laplacian
 // vanishes, the vertices around the region held: the converged limit of SmoothRegion,
 // solved at once. A strip collapsed onto a line (all its vertices and most of their
-// neighbours on one segment, block A thorough, session 30) stays collapsed under the
+// neighbours on one segment) stays collapsed under the
 // sweeps, whose means of collinear points are on the line again; the solve spans the
 // membrane from the region's rim, which a ring or two out is off the line. Returns false
 // (nothing moved) when the system cannot be solved.
@@ -299,31 +299,92 @@ bool SolveMembrane(TinMesh* mesh, const std::vector<bool>& region) {
   return true;
 }
 
-}  // namespace
-
-UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds) {
+// The crossing pairs of an untangling and the points of the round with the fewest
+// pairs so far (the later of equals), which are what it returns.
+struct UntangleState {
+  std::set<std::pair<int, int>> pairs;
+  std::vector<Eigen::Vector3d> best;
+  size_t best_pairs = 0;
   UntangleReport report;
-  std::set<std::pair<int, int>> pairs = SelfIntersectingPairs(*mesh, Points(*mesh));
-  report.pairs_before = report.pairs_after = static_cast<int>(pairs.size());
-  // The smoothing can spread a tangle instead of undoing it (block A default, session 28:
-  // 45 pairs before the finest level's untangling, 68 after): the points of the round with
-  // the fewest pairs (the later of equals) are what it returns.
-  const std::vector<Eigen::Vector3d> original = Points(*mesh);
-  std::vector<Eigen::Vector3d> best = original;
-  size_t best_pairs = pairs.size();
-  auto remember_if_best = [&]() {
+
+  void RememberIfBest(const TinMesh& mesh) {
     report.pairs_after = static_cast<int>(pairs.size());
     if (pairs.size() <= best_pairs) {
       best_pairs = pairs.size();
-      best = Points(*mesh);
+      best = Points(mesh);
     }
-  };
+  }
+};
+
+// Membranes over one tangle grown by 1..kMaxMembraneRings rings: the first that leaves
+// fewer pairs is kept (true); the others are undone.
+bool TryMembranes(TinMesh* mesh, const std::set<std::pair<int, int>>& tangle, UntangleState* state) {
+  for (int rings = 1; rings <= kMaxMembraneRings; ++rings) {
+    const std::vector<Eigen::Vector3d> before = Points(*mesh);
+    const std::vector<bool> region = CrossingRegion(*mesh, tangle, rings, std::vector<bool>(mesh->n_vertices(), false));
+    if (!SolveMembrane(mesh, region)) continue;
+    ++state->report.membranes;
+    // The pairs recounted among the faces near the region only (a tangle may get
+    // up to 4 membranes a round: whole-mesh passes would cost seconds each time on
+    // a tangled finest level); the pairs elsewhere are what they were.
+    const std::vector<int> near = FacesNearRegion(*mesh, region, before);
+    std::vector<bool> in_near(mesh->n_faces(), false);
+    for (int f : near) in_near[f] = true;
+    std::set<std::pair<int, int>> now = CrossingPairsAmong(*mesh, Points(*mesh), &near);
+    for (const auto& pair : state->pairs) {
+      if (!in_near[pair.first] || !in_near[pair.second]) now.insert(pair);
+    }
+    if (now.size() >= state->pairs.size()) {
+      for (auto vh : mesh->vertices()) mesh->set_point(vh, ToOpenMesh(before[vh.idx()]));
+      continue;
+    }
+    state->pairs = std::move(now);
+    state->RememberIfBest(*mesh);
+    return true;
+  }
+  return false;
+}
+
+// Still crossing after the smoothing rounds: each tangle (crossing pairs a ring or two
+// apart) gets the membrane over it (TryMembranes), from the best points so far.
+// Repeated while a round helps: a membrane that cuts a tangle down leaves a smaller
+// one, whose own membrane can then finish it. Small regions only: a membrane flattens
+// whatever real shape lies within it, and one over a wide region cuts through the
+// walls around it (a pocket under a leaning wall went from 76 crossing pairs to 48
+// with one ring, to 181-491 with 2-64). They run before the long sweeps, which run
+// over regions grown by up to max_rounds rings and sag whatever lies in them (a horn
+// over a gable's ridge end: the sweeps left 14 of 20 pairs and pulled the ridge's last
+// 3 m down by up to 3.4 m; the membranes first left none and kept the ridge).
+void MembraneRounds(TinMesh* mesh, int max_rounds, UntangleState* state) {
+  for (auto vh : mesh->vertices()) mesh->set_point(vh, ToOpenMesh(state->best[vh.idx()]));
+  state->pairs = SelfIntersectingPairs(*mesh, state->best);
+  bool helped = true;
+  for (int round = 0; round < max_rounds && helped && !state->pairs.empty(); ++round) {
+    helped = false;
+    for (const std::set<std::pair<int, int>>& tangle : Tangles(*mesh, state->pairs)) {
+      if (TryMembranes(mesh, tangle, state)) helped = true;
+    }
+  }
+}
+
+}  // namespace
+
+UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds) {
+  UntangleState state;
+  state.pairs = SelfIntersectingPairs(*mesh, Points(*mesh));
+  state.report.pairs_before = state.report.pairs_after = static_cast<int>(state.pairs.size());
+  // The smoothing can spread a tangle instead of undoing it (45 crossing pairs before a
+  // finest level's untangling have become 68): the points of the round with the fewest
+  // pairs are what it returns.
+  const std::vector<Eigen::Vector3d> original = Points(*mesh);
+  state.best = original;
+  state.best_pairs = state.pairs.size();
   // Folded faces give G1 patches that curl through their neighbours' even where the
   // chord triangles do not cross: their corners are smoothed in the first round too.
   const std::vector<bool> folded = FoldedFaces(*mesh);
   const bool any_fold = std::find(folded.begin(), folded.end(), true) != folded.end();
-  for (int round = 1; round <= max_rounds && (!pairs.empty() || (round == 1 && any_fold)); ++round) {
-    report.rounds = round;
+  for (int round = 1; round <= max_rounds && (!state.pairs.empty() || (round == 1 && any_fold)); ++round) {
+    state.report.rounds = round;
     std::vector<bool> seed(mesh->n_vertices(), false);
     if (round == 1) {
       for (auto f : mesh->faces()) {
@@ -332,75 +393,32 @@ UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds) {
       }
     }
     // A crossing that survived smoothing its own corners needs a wider patch.
-    SmoothRegion(mesh, CrossingRegion(*mesh, pairs, round - 1, std::move(seed)), 3);
-    pairs = SelfIntersectingPairs(*mesh, Points(*mesh));
-    remember_if_best();
+    SmoothRegion(mesh, CrossingRegion(*mesh, state.pairs, round - 1, std::move(seed)), 3);
+    state.pairs = SelfIntersectingPairs(*mesh, Points(*mesh));
+    state.RememberIfBest(*mesh);
   }
-  // Still crossing: each tangle (crossing pairs a ring or two apart) gets the membrane
-  // over it grown by 1..kMaxMembraneRings rings, from the best points so far; the first
-  // that leaves fewer pairs is kept. Repeated while a round helps: a membrane that cuts a
-  // tangle down leaves a smaller one, whose own membrane can then finish it. Small regions
-  // only: a membrane flattens whatever real shape lies within it, and one over a wide
-  // region cuts through the walls around it (block A default, session 28: a pocket under
-  // the leaning wall, 76 pairs -> 48 with one ring, 181-491 with 2-64). Before the long
-  // sweeps below, which run over regions grown by up to max_rounds rings and sag whatever
-  // lies in them (block A thorough, session 30: a horn over a gable building's ridge end,
-  // 20 pairs -> 14, the ridge's last 3 m pulled down by up to 3.4 m; the membranes first:
-  // none left, the ridge kept).
-  if (best_pairs > 0) {
-    for (auto vh : mesh->vertices()) mesh->set_point(vh, ToOpenMesh(best[vh.idx()]));
-    pairs = SelfIntersectingPairs(*mesh, best);
-    bool helped = true;
-    for (int round = 0; round < max_rounds && helped && !pairs.empty(); ++round) {
-      helped = false;
-      for (const std::set<std::pair<int, int>>& tangle : Tangles(*mesh, pairs)) {
-        for (int rings = 1; rings <= kMaxMembraneRings; ++rings) {
-          const std::vector<Eigen::Vector3d> before = Points(*mesh);
-          const std::vector<bool> region =
-              CrossingRegion(*mesh, tangle, rings, std::vector<bool>(mesh->n_vertices(), false));
-          if (!SolveMembrane(mesh, region)) continue;
-          ++report.membranes;
-          // The pairs recounted among the faces near the region only (a tangle may get
-          // up to 4 membranes a round: whole-mesh passes would cost seconds each time on
-          // a tangled finest level); the pairs elsewhere are what they were.
-          const std::vector<int> near = FacesNearRegion(*mesh, region, before);
-          std::vector<bool> in_near(mesh->n_faces(), false);
-          for (int f : near) in_near[f] = true;
-          std::set<std::pair<int, int>> now = CrossingPairsAmong(*mesh, Points(*mesh), &near);
-          for (const auto& pair : pairs) {
-            if (!in_near[pair.first] || !in_near[pair.second]) now.insert(pair);
-          }
-          if (now.size() >= pairs.size()) {
-            for (auto vh : mesh->vertices()) mesh->set_point(vh, ToOpenMesh(before[vh.idx()]));
-            continue;
-          }
-          pairs = std::move(now);
-          remember_if_best();
-          helped = true;
-          break;
-        }
-      }
-    }
-  }
+  if (state.best_pairs > 0) MembraneRounds(mesh, max_rounds, &state);
   // A pleat (a strip of faces folded flat over its neighbours, where one image or none
   // sees the surface) outlasts three sweeps a round: its vertices need the smoothing
-  // run nearly to convergence over a patch around it (session 20: 11 and 4 pairs left
-  // in two runs, none after 3-4 of these rounds). Runs only when the rounds and the
-  // membranes above failed.
-  for (int extra = 1; extra <= max_rounds && !pairs.empty(); ++extra) {
-    report.rounds = max_rounds + extra;
+  // run nearly to convergence over a patch around it (3-4 of these rounds cleared the
+  // 4-11 pairs the short rounds left). Runs only when the rounds and the membranes
+  // above failed.
+  for (int extra = 1; extra <= max_rounds && !state.pairs.empty(); ++extra) {
+    state.report.rounds = max_rounds + extra;
     const int sweeps = 3 * (extra + 1) * (extra + 1);
-    const std::vector<bool> region = CrossingRegion(*mesh, pairs, extra, std::vector<bool>(mesh->n_vertices(), false));
+    const std::vector<bool> region =
+        CrossingRegion(*mesh, state.pairs, extra, std::vector<bool>(mesh->n_vertices(), false));
     SmoothRegion(mesh, region, sweeps);
-    pairs = SelfIntersectingPairs(*mesh, Points(*mesh));
-    remember_if_best();
+    state.pairs = SelfIntersectingPairs(*mesh, Points(*mesh));
+    state.RememberIfBest(*mesh);
   }
-  if (static_cast<size_t>(report.pairs_after) > best_pairs) {
-    for (auto vh : mesh->vertices()) mesh->set_point(vh, ToOpenMesh(best[vh.idx()]));
-    report.pairs_after = static_cast<int>(best_pairs);
+  UntangleReport& report = state.report;
+  if (static_cast<size_t>(report.pairs_after) > state.best_pairs) {
+    for (auto vh : mesh->vertices()) mesh->set_point(vh, ToOpenMesh(state.best[vh.idx()]));
+    report.pairs_after = static_cast<int>(state.best_pairs);
     report.kept_best_round = true;
   }
-  for (auto vh : mesh->vertices()) report.vertices_moved += best[vh.idx()] != original[vh.idx()] ? 1 : 0;
+  for (auto vh : mesh->vertices()) report.vertices_moved += state.best[vh.idx()] != original[vh.idx()] ? 1 : 0;
   return report;
 }
 

@@ -1,4 +1,4 @@
-// Validity of a TIN as it turns from 2.5D into 3D (issue 7): folded triangles, self-
+// Validity of a TIN as it turns from 2.5D into 3D: folded triangles, self-
 // intersections, and a guard that limits vertex steps which would fold the surface.
 #pragma once
 

@@ -81,6 +81,115 @@ SubTriangleLocation LocateSubTriangle(const Eigen::Vector3d& b) {
   return loc;
 }
 
+namespace {
+
+constexpr int kEdgeNodes = kN - 1;                    // lattice nodes inside an edge
+constexpr int kInner = (kN - 1) * (kN - 2) / 2;       // lattice nodes inside a face
+
+// Where the lattice nodes of a mesh go in Tessellation::points: vertices, then edge
+// nodes, then face-interior nodes, then the duplicates along creases (a crease edge's
+// nodes again for its second face, a vertex's node again for each further sector).
+struct NodeLayout {
+  int nv = 0, ne = 0;
+  bool split = false;                // with crease tables
+  std::vector<int> crease_edge_base;  // by edge: first duplicate node, -1 off creases
+  std::vector<int> sector_base;       // by vertex: node of its sector 1, -1 with one sector
+  size_t num_points = 0;
+};
+
+NodeLayout LayOutNodes(const TinMesh& mesh, const CornerNormals& creases) {
+  NodeLayout layout;
+  layout.nv = static_cast<int>(mesh.n_vertices());
+  layout.ne = static_cast<int>(mesh.n_edges());
+  const int nf = static_cast<int>(mesh.n_faces());
+  layout.num_points = static_cast<size_t>(layout.nv) + static_cast<size_t>(kEdgeNodes) * layout.ne +
+                      static_cast<size_t>(kInner) * nf;
+  // Duplicated nodes along creases (empty tables without creases).
+  layout.split = !creases.crease_edge.empty();
+  if (!layout.split) return layout;
+  layout.crease_edge_base.assign(layout.ne, -1);
+  for (int e = 0; e < layout.ne; ++e) {
+    if (!creases.crease_edge[e]) continue;
+    layout.crease_edge_base[e] = static_cast<int>(layout.num_points);
+    layout.num_points += kEdgeNodes;
+  }
+  layout.sector_base.assign(layout.nv, -1);
+  for (int v = 0; v < layout.nv; ++v) {
+    if (creases.vertex_sectors[v] <= 1) continue;
+    layout.sector_base[v] = static_cast<int>(layout.num_points);
+    layout.num_points += creases.vertex_sectors[v] - 1;
+  }
+  return layout;
+}
+
+// Topology of face f: its lattice node (i, j) -> global node index, the first face of
+// each node recorded with the node's barycentrics, and the face's sub-triangles.
+void AddFaceLattice(const TinMesh& mesh, const CornerNormals& creases, const NodeLayout& layout, int f,
+                    Tessellation* tess) {
+  const int nv = layout.nv, ne = layout.ne;
+  const bool split = layout.split;
+  std::array<int, (kN + 1) * (kN + 1)> node;
+  const auto fh = mesh.face_handle(f);
+  std::array<TinMesh::HalfedgeHandle, 3> h;
+  std::array<int, 3> v;
+  int c = 0;
+  for (auto he : mesh.fh_range(fh)) h[c++] = he;
+  for (c = 0; c < 3; ++c) v[c] = mesh.to_vertex_handle(h[c]).idx();
+  // Edge from v_a to v_b is the edge of h_{a+1}; node at position t (1..n-1) from v_a.
+  auto edge_node = [&](int a, int b, int t) {
+    const auto heh = h[(a + 1) % 3];
+    const int e = mesh.edge_handle(heh).idx();
+    const int local = v[a] < v[b] ? t - 1 : kN - t - 1;
+    if (split && layout.crease_edge_base[e] >= 0 && mesh.halfedge_handle(mesh.edge_handle(heh), 1) == heh) {
+      return layout.crease_edge_base[e] + local;
+    }
+    return nv + kEdgeNodes * e + local;
+  };
+  // Vertex node of corner c: the vertex itself, or its sector's duplicate.
+  auto vertex_node = [&](int c) {
+    if (!split) return v[c];
+    const int sector = creases.corner_sector[h[c].idx()];
+    return sector == 0 ? v[c] : layout.sector_base[v[c]] + sector - 1;
+  };
+  for (int j = 0; j <= kN; ++j) {
+    for (int i = 0; i + j <= kN; ++i) {
+      int g;
+      if (i == 0 && j == 0) {
+        g = vertex_node(0);
+      } else if (i == kN) {
+        g = vertex_node(1);
+      } else if (j == kN) {
+        g = vertex_node(2);
+      } else if (j == 0) {
+        g = edge_node(0, 1, i);
+      } else if (i + j == kN) {
+        g = edge_node(1, 2, j);
+      } else if (i == 0) {
+        g = edge_node(2, 0, kN - j);
+      } else {
+        g = nv + kEdgeNodes * ne + kInner * f + InteriorIndex(i, j);
+      }
+      node[j * (kN + 1) + i] = g;
+      if (tess->point_face[g] < 0) {
+        tess->point_face[g] = f;
+        tess->point_barycentric[g] = Eigen::Vector3d(kN - i - j, i, j) / static_cast<double>(kN);
+      }
+    }
+  }
+  for (int k = 0; k < kSubTrianglesPerFace; ++k) {
+    const auto& corners = SubTriangleCorners(k);
+    Eigen::Vector3i t;
+    for (int c2 = 0; c2 < 3; ++c2) {
+      const int i = static_cast<int>(std::lround(corners[c2][1] * kN));
+      const int j = static_cast<int>(std::lround(corners[c2][2] * kN));
+      t[c2] = node[j * (kN + 1) + i];
+    }
+    tess->triangles[static_cast<size_t>(kSubTrianglesPerFace) * f + k] = t;
+  }
+}
+
+}  // namespace
+
 Tessellation Tessellate(const TinMesh& mesh) { return Tessellate(mesh, BuildPatches(mesh)); }
 
 Tessellation Tessellate(const TinMesh& mesh, const std::vector<G1Patch>& patches) {
@@ -100,99 +209,16 @@ Tessellation Tessellate(const TinMesh& mesh, const std::vector<G1Patch>& patches
       }
     }
   }
-  const int nv = static_cast<int>(mesh.n_vertices());
-  const int ne = static_cast<int>(mesh.n_edges());
   const int nf = static_cast<int>(mesh.n_faces());
-  constexpr int kEdgeNodes = kN - 1;
-  constexpr int kInner = (kN - 1) * (kN - 2) / 2;
-  const size_t base_points = static_cast<size_t>(nv) + static_cast<size_t>(kEdgeNodes) * ne +
-                             static_cast<size_t>(kInner) * nf;
-  // Duplicated nodes along creases (empty tables without creases).
-  const bool split = !creases.crease_edge.empty();
-  std::vector<int> crease_edge_base, sector_base;
-  size_t num_points = base_points;
-  if (split) {
-    crease_edge_base.assign(ne, -1);
-    for (int e = 0; e < ne; ++e) {
-      if (!creases.crease_edge[e]) continue;
-      crease_edge_base[e] = static_cast<int>(num_points);
-      num_points += kEdgeNodes;
-    }
-    sector_base.assign(nv, -1);
-    for (int v = 0; v < nv; ++v) {
-      if (creases.vertex_sectors[v] <= 1) continue;
-      sector_base[v] = static_cast<int>(num_points);
-      num_points += creases.vertex_sectors[v] - 1;
-    }
-  }
+  const NodeLayout layout = LayOutNodes(mesh, creases);
+  const size_t num_points = layout.num_points;
   Tessellation tess;
   tess.points.resize(num_points);
   tess.point_face.assign(num_points, -1);
   tess.point_barycentric.assign(num_points, Eigen::Vector3d::Zero());
   tess.triangles.resize(static_cast<size_t>(kSubTrianglesPerFace) * nf);
-
-  // Topology (serial, cheap): lattice node (i, j) of each face -> global node index.
-  std::array<int, (kN + 1) * (kN + 1)> node;
-  for (int f = 0; f < nf; ++f) {
-    const auto fh = mesh.face_handle(f);
-    std::array<TinMesh::HalfedgeHandle, 3> h;
-    std::array<int, 3> v;
-    int c = 0;
-    for (auto he : mesh.fh_range(fh)) h[c++] = he;
-    for (c = 0; c < 3; ++c) v[c] = mesh.to_vertex_handle(h[c]).idx();
-    // Edge from v_a to v_b is the edge of h_{a+1}; node at position t (1..n-1) from v_a.
-    auto edge_node = [&](int a, int b, int t) {
-      const auto heh = h[(a + 1) % 3];
-      const int e = mesh.edge_handle(heh).idx();
-      const int local = v[a] < v[b] ? t - 1 : kN - t - 1;
-      if (split && crease_edge_base[e] >= 0 && mesh.halfedge_handle(mesh.edge_handle(heh), 1) == heh) {
-        return crease_edge_base[e] + local;
-      }
-      return nv + kEdgeNodes * e + local;
-    };
-    // Vertex node of corner c: the vertex itself, or its sector's duplicate.
-    auto vertex_node = [&](int c) {
-      if (!split) return v[c];
-      const int sector = creases.corner_sector[h[c].idx()];
-      return sector == 0 ? v[c] : sector_base[v[c]] + sector - 1;
-    };
-    for (int j = 0; j <= kN; ++j) {
-      for (int i = 0; i + j <= kN; ++i) {
-        int g;
-        if (i == 0 && j == 0) {
-          g = vertex_node(0);
-        } else if (i == kN) {
-          g = vertex_node(1);
-        } else if (j == kN) {
-          g = vertex_node(2);
-        } else if (j == 0) {
-          g = edge_node(0, 1, i);
-        } else if (i + j == kN) {
-          g = edge_node(1, 2, j);
-        } else if (i == 0) {
-          g = edge_node(2, 0, kN - j);
-        } else {
-          g = nv + kEdgeNodes * ne + kInner * f + InteriorIndex(i, j);
-        }
-        node[j * (kN + 1) + i] = g;
-        if (tess.point_face[g] < 0) {
-          tess.point_face[g] = f;
-          tess.point_barycentric[g] =
-              Eigen::Vector3d(kN - i - j, i, j) / static_cast<double>(kN);
-        }
-      }
-    }
-    for (int k = 0; k < kSubTrianglesPerFace; ++k) {
-      const auto& corners = SubTriangleCorners(k);
-      Eigen::Vector3i t;
-      for (int c2 = 0; c2 < 3; ++c2) {
-        const int i = static_cast<int>(std::lround(corners[c2][1] * kN));
-        const int j = static_cast<int>(std::lround(corners[c2][2] * kN));
-        t[c2] = node[j * (kN + 1) + i];
-      }
-      tess.triangles[static_cast<size_t>(kSubTrianglesPerFace) * f + k] = t;
-    }
-  }
+  // Topology (serial, cheap).
+  for (int f = 0; f < nf; ++f) AddFaceLattice(mesh, creases, layout, f, &tess);
   for (size_t p = 0; p < num_points; ++p) {
     if (tess.point_face[p] < 0) {
       throw std::invalid_argument("Tessellate: isolated vertex " + std::to_string(p) +

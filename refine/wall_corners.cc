@@ -12,6 +12,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "mesh/creases.h"
 #include "mesh/local_ops.h"
 #include "mesh/principal_axes.h"
 
@@ -24,16 +25,6 @@ constexpr double kSteepMaxNz = 0.5;  // a wall: normal more than 60 degrees from
 struct Region {
   Eigen::Vector3d centre, normal;
 };
-
-Eigen::Vector3d UnitFaceNormal(const TinMesh& mesh, TinMesh::FaceHandle f) {
-  auto it = mesh.cfv_iter(f);
-  const Eigen::Vector3d p0 = ToEigen(mesh.point(*it));
-  const Eigen::Vector3d p1 = ToEigen(mesh.point(*++it));
-  const Eigen::Vector3d p2 = ToEigen(mesh.point(*++it));
-  const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
-  const double len = n.norm();
-  return len > 0.0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
-}
 
 PrincipalAxes FitFaces(const TinMesh& mesh, const std::vector<int>& faces) {
   std::vector<Eigen::Vector3d> points;
@@ -109,30 +100,15 @@ std::vector<Region> GrowRegions(const TinMesh& mesh, const WallCornerOptions& o,
   return regions;
 }
 
-// One wall often comes out of GrowRegions in pieces: where its faces crumple near a
-// corner, or a lower band leans a few degrees off, the growth stops at a face and starts
-// again beyond it, and a piece that shares no edge with the rest keeps its own plane
-// (block_oblique, session 34: the west wall of building 5 as a region z 1.3..4.9 and
-// another z 0.4..2.0, 9 degrees off). Steep regions whose vertices come within one edge
-// of each other (they share a vertex, or an edge joins them) are merged when their
-// normals lie within region_angle_deg and one plane fits both within region_tolerance,
-// the most parallel pairs first; the merged region's plane is the fit of all its faces.
-// Returns the number of merges.
-int MergeWallPieces(const TinMesh& mesh, const WallCornerOptions& o, std::vector<int>* face_region,
-                    std::vector<Region>* regions) {
-  const int nr = static_cast<int>(regions->size());
-  const double cos_angle = std::cos(o.region_angle_deg * kDeg);
-  const double tol = o.region_tolerance * o.edge_length;
-  std::vector<bool> steep(nr);
-  for (int r = 0; r < nr; ++r) steep[r] = std::abs((*regions)[r].normal.z()) < kSteepMaxNz;
-  std::vector<std::vector<int>> faces(nr);
-  for (int f = 0; f < static_cast<int>(face_region->size()); ++f) {
-    if ((*face_region)[f] >= 0) faces[(*face_region)[f]].push_back(f);
-  }
+// The pairs of steep regions whose vertices come within one edge of each other (they
+// share a vertex, or an edge joins them), the most parallel pairs first.
+std::vector<std::pair<int, int>> NeighbouringWallPairs(const TinMesh& mesh, const std::vector<int>& face_region,
+                                                       const std::vector<Region>& regions,
+                                                       const std::vector<bool>& steep) {
   // The steep regions around each vertex, then the pairs an edge (or a vertex) joins.
   std::vector<std::vector<int>> around(mesh.n_vertices());
   for (auto f : mesh.faces()) {
-    const int r = (*face_region)[f.idx()];
+    const int r = face_region[f.idx()];
     if (r < 0 || !steep[r]) continue;
     for (auto v : mesh.fv_range(f)) {
       std::vector<int>& list = around[v.idx()];
@@ -155,20 +131,44 @@ int MergeWallPieces(const TinMesh& mesh, const WallCornerOptions& o, std::vector
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
   std::stable_sort(pairs.begin(), pairs.end(), [&](const std::pair<int, int>& a, const std::pair<int, int>& b) {
-    return (*regions)[a.first].normal.dot((*regions)[a.second].normal) >
-           (*regions)[b.first].normal.dot((*regions)[b.second].normal);
+    return regions[a.first].normal.dot(regions[a.second].normal) >
+           regions[b.first].normal.dot(regions[b.second].normal);
   });
+  return pairs;
+}
+
+int FindRoot(std::vector<int>& root, int r) {
+  while (root[r] != r) r = root[r] = root[root[r]];
+  return r;
+}
+
+// One wall often comes out of GrowRegions in pieces: where its faces crumple near a
+// corner, or a lower band leans a few degrees off, the growth stops at a face and starts
+// again beyond it, and a piece that shares no edge with the rest keeps its own plane
+// (one wall as a region z 1.3..4.9 m and another z 0.4..2.0 m, 9 degrees off). Steep
+// regions whose vertices come within one edge of each other are merged when their
+// normals lie within region_angle_deg and one plane fits both within region_tolerance,
+// the most parallel pairs first (NeighbouringWallPairs); the merged region's plane is
+// the fit of all its faces. Returns the number of merges.
+int MergeWallPieces(const TinMesh& mesh, const WallCornerOptions& o, std::vector<int>* face_region,
+                    std::vector<Region>* regions) {
+  const int nr = static_cast<int>(regions->size());
+  const double cos_angle = std::cos(o.region_angle_deg * kDeg);
+  const double tol = o.region_tolerance * o.edge_length;
+  std::vector<bool> steep(nr);
+  for (int r = 0; r < nr; ++r) steep[r] = std::abs((*regions)[r].normal.z()) < kSteepMaxNz;
+  std::vector<std::vector<int>> faces(nr);
+  for (int f = 0; f < static_cast<int>(face_region->size()); ++f) {
+    if ((*face_region)[f] >= 0) faces[(*face_region)[f]].push_back(f);
+  }
+  const std::vector<std::pair<int, int>> pairs = NeighbouringWallPairs(mesh, *face_region, *regions, steep);
   std::vector<int> root(nr);
   std::iota(root.begin(), root.end(), 0);
-  auto find = [&](int r) {
-    while (root[r] != r) r = root[r] = root[root[r]];
-    return r;
-  };
   int merges = 0;
   for (bool again = true; again;) {
     again = false;
     for (const auto& [i, j] : pairs) {
-      const int a = find(i), b = find(j);
+      const int a = FindRoot(root, i), b = FindRoot(root, j);
       if (a == b) continue;
       if ((*regions)[a].normal.dot((*regions)[b].normal) < cos_angle) continue;
       std::vector<int> both = faces[a];
@@ -190,15 +190,185 @@ int MergeWallPieces(const TinMesh& mesh, const WallCornerOptions& o, std::vector
   std::vector<int> renumber(nr, -1);
   std::vector<Region> merged;
   for (int r = 0; r < nr; ++r) {
-    if (find(r) != r) continue;
+    if (FindRoot(root, r) != r) continue;
     renumber[r] = static_cast<int>(merged.size());
     merged.push_back((*regions)[r]);
   }
   for (int& r : *face_region) {
-    if (r >= 0) r = renumber[find(r)];
+    if (r >= 0) r = renumber[FindRoot(root, r)];
   }
   *regions = std::move(merged);
   return merges;
+}
+
+// The regions seen from the vertices: which are steep (walls), the regions of each
+// vertex's faces, whether one of them is a roof or ground, and each region's vertices.
+struct RegionMaps {
+  std::vector<bool> steep;                        // by region
+  std::vector<std::vector<int>> vertex_regions;   // by vertex
+  std::vector<bool> on_flat;                      // by vertex
+  std::vector<std::vector<int>> region_vertices;  // by region
+};
+
+RegionMaps MapRegions(const TinMesh& mesh, const std::vector<Region>& regions, const std::vector<int>& face_region) {
+  const int nr = static_cast<int>(regions.size());
+  const int nv = static_cast<int>(mesh.n_vertices());
+  RegionMaps maps;
+  maps.steep.resize(nr);
+  for (int r = 0; r < nr; ++r) maps.steep[r] = std::abs(regions[r].normal.z()) < kSteepMaxNz;
+  maps.vertex_regions.resize(nv);
+  maps.on_flat.assign(nv, false);
+  for (auto f : mesh.faces()) {
+    const int r = face_region[f.idx()];
+    if (r < 0) continue;
+    for (auto v : mesh.fv_range(f)) {
+      if (!maps.steep[r]) maps.on_flat[v.idx()] = true;
+      std::vector<int>& list = maps.vertex_regions[v.idx()];
+      if (std::find(list.begin(), list.end(), r) == list.end()) list.push_back(r);
+    }
+  }
+  maps.region_vertices.resize(nr);
+  for (int v = 0; v < nv; ++v) {
+    for (int r : maps.vertex_regions[v]) maps.region_vertices[r].push_back(v);
+  }
+  return maps;
+}
+
+Eigen::Vector3d VertexPoint(const TinMesh& mesh, int v) { return ToEigen(mesh.point(mesh.vertex_handle(v))); }
+
+// Distance in m of p from the line through q along the unit vector dir.
+double OffLine(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& dir) {
+  const Eigen::Vector3d d = p - q;
+  return (d - d.dot(dir) * dir).norm();
+}
+
+// The line where two planes meet: a point on it nearest `near`, and its direction.
+void MeetLine(const Region& a, const Region& b, const Eigen::Vector3d& near, Eigen::Vector3d* q,
+              Eigen::Vector3d* dir) {
+  *dir = a.normal.cross(b.normal).normalized();
+  Eigen::Matrix3d m;
+  m.row(0) = a.normal.transpose();
+  m.row(1) = b.normal.transpose();
+  m.row(2) = dir->transpose();
+  *q = m.colPivHouseholderQr().solve(Eigen::Vector3d(a.normal.dot(a.centre), b.normal.dot(b.centre), dir->dot(near)));
+}
+
+// Feet and eaves: each plane refitted to its region's vertices within local_fit edges
+// of the line (q, dir), then the line where the refitted planes meet. False when a
+// region has too few vertices there, changes from wall to gentle or back, or the
+// planes no longer enclose 45-135 degrees.
+bool RefitNearLine(const TinMesh& mesh, const WallCornerOptions& options, const RegionMaps& maps, const int ids[2],
+                   Region plane[2], Eigen::Vector3d* q, Eigen::Vector3d* dir) {
+  const double h = options.edge_length;
+  const double cos_min = std::cos(135.0 * kDeg), cos_max = std::cos(45.0 * kDeg);
+  for (int k = 0; k < 2; ++k) {
+    std::vector<Eigen::Vector3d> near;
+    for (int v : maps.region_vertices[ids[k]]) {
+      if (OffLine(VertexPoint(mesh, v), *q, *dir) <= options.local_fit * h) near.push_back(VertexPoint(mesh, v));
+    }
+    if (static_cast<int>(near.size()) < options.min_region_faces) return false;
+    const PrincipalAxes fit = FitPrincipalAxes(near);
+    const Eigen::Vector3d n = fit.Normal().dot(plane[k].normal) < 0.0 ? Eigen::Vector3d(-fit.Normal()) : fit.Normal();
+    const bool still = maps.steep[ids[k]] == (std::abs(n.z()) < kSteepMaxNz);
+    plane[k] = {fit.centre, n};
+    if (!still) return false;
+  }
+  const double c = plane[0].normal.dot(plane[1].normal);
+  if (c > cos_max || c < cos_min) return false;
+  const Eigen::Vector3d near_line = *q;  // not an alias of the result
+  MeetLine(plane[0], plane[1], near_line, q, dir);
+  return true;
+}
+
+// The common stretch of two regions along the line (q, dir), half an edge short of
+// each end, and which side of the first plane the second region lies on: false when a
+// region does not come within 1.6 edges of the line or the stretch is under two edges.
+bool CommonStretch(const TinMesh& mesh, const RegionMaps& maps, const int ids[2], const Region plane[2], double h,
+                   const Eigen::Vector3d& q, const Eigen::Vector3d& dir, WallCorner* corner) {
+  // Each region's stretch along the line (its vertices within 2 edges of it), how
+  // close it comes, and the mean of those vertices (which side of the other plane
+  // the region lies on).
+  double lo[2], hi[2], nearest[2];
+  Eigen::Vector3d beside[2];
+  for (int k = 0; k < 2; ++k) {
+    lo[k] = std::numeric_limits<double>::infinity();
+    hi[k] = -lo[k];
+    nearest[k] = lo[k];
+    beside[k].setZero();
+    int count = 0;
+    for (int v : maps.region_vertices[ids[k]]) {
+      const Eigen::Vector3d p = VertexPoint(mesh, v);
+      const double d = OffLine(p, q, dir);
+      nearest[k] = std::min(nearest[k], d);
+      if (d > 2.0 * h) continue;
+      const double t = (p - q).dot(dir);
+      lo[k] = std::min(lo[k], t);
+      hi[k] = std::max(hi[k], t);
+      beside[k] += p;
+      ++count;
+    }
+    if (count > 0) beside[k] /= count;
+  }
+  if (nearest[0] > 1.6 * h || nearest[1] > 1.6 * h) return false;
+  const double t0 = std::max(lo[0], lo[1]) + 0.5 * h, t1 = std::min(hi[0], hi[1]) - 0.5 * h;
+  if (t1 - t0 < 2.0 * h) return false;
+  corner->point = q + 0.5 * (t0 + t1) * dir;
+  corner->direction = dir;
+  corner->half_length = 0.5 * (t1 - t0);
+  for (int k = 0; k < 2; ++k) {
+    corner->normal[k] = plane[k].normal;
+    corner->centre[k] = plane[k].centre;
+  }
+  corner->convex = (beside[1] - beside[0]).dot(plane[0].normal) < 0.0;
+  return true;
+}
+
+// The corner's band: the vertices within `band` edges of its line along its stretch,
+// not on the border; for a vertical corner not on a roof or ground region, for a foot
+// or an eave on no region but the two.
+void CollectBand(const TinMesh& mesh, const WallCornerOptions& options, const RegionMaps& maps, const int ids[2],
+                 bool vertical, const Eigen::Vector3d& q, WallCorner* corner) {
+  const double h = options.edge_length;
+  const Eigen::Vector3d& dir = corner->direction;
+  for (auto vh : mesh.vertices()) {
+    if (mesh.is_boundary(vh)) continue;
+    if (vertical && maps.on_flat[vh.idx()]) continue;
+    if (!vertical && std::any_of(maps.vertex_regions[vh.idx()].begin(), maps.vertex_regions[vh.idx()].end(),
+                                 [&](int r) { return r != ids[0] && r != ids[1]; }))
+      continue;
+    const Eigen::Vector3d p = ToEigen(mesh.point(vh));
+    const double t = (p - corner->point).dot(dir);
+    if (std::abs(t) > corner->half_length || OffLine(p, q, dir) > options.band * h) continue;
+    corner->band.push_back(vh.idx());
+  }
+}
+
+// The corner of regions i and j (i < j), when they make one (see the header).
+bool FindCorner(const TinMesh& mesh, const WallCornerOptions& options, const std::vector<Region>& regions,
+                const RegionMaps& maps, int i, int j, WallCorner* corner) {
+  const std::vector<bool>& steep = maps.steep;
+  if (!steep[i] && !steep[j]) return false;
+  const bool vertical = steep[i] && steep[j];
+  if (vertical ? !options.vertical : !(options.feet || options.eaves)) return false;
+  const double cos_min = std::cos(135.0 * kDeg), cos_max = std::cos(45.0 * kDeg);
+  const double cos_vertical_min = std::cos((180.0 - options.min_corner_angle_deg) * kDeg);
+  const double cos_vertical_max = std::cos(options.min_corner_angle_deg * kDeg);
+  // A wall first: its normal gives the corner's orientation.
+  const int ids[2] = {steep[i] ? i : j, steep[i] ? j : i};
+  Region plane[2] = {regions[ids[0]], regions[ids[1]]};
+  const double cos_ab = plane[0].normal.dot(plane[1].normal);
+  if (cos_ab > (vertical ? cos_vertical_max : cos_max) || cos_ab < (vertical ? cos_vertical_min : cos_min)) {
+    return false;
+  }
+  Eigen::Vector3d q, dir;
+  MeetLine(plane[0], plane[1], 0.5 * (plane[0].centre + plane[1].centre), &q, &dir);
+  if (!vertical && !RefitNearLine(mesh, options, maps, ids, plane, &q, &dir)) return false;
+  if (!CommonStretch(mesh, maps, ids, plane, options.edge_length, q, dir, corner)) return false;
+  corner->kind = vertical ? CreaseKind::kVertical : corner->convex ? CreaseKind::kEave : CreaseKind::kFoot;
+  if (corner->kind == CreaseKind::kFoot && !options.feet) return false;
+  if (corner->kind == CreaseKind::kEave && !options.eaves) return false;
+  CollectBand(mesh, options, maps, ids, vertical, q, corner);
+  return !corner->band.empty();
 }
 
 }  // namespace
@@ -239,147 +409,29 @@ WallCornerSearch FindWallCorners(const TinMesh& mesh, const WallCornerOptions& o
   std::vector<Region> regions = GrowRegions(mesh, options, &face_region);
   if (options.merge_wall_pieces) search.merged_walls = MergeWallPieces(mesh, options, &face_region, &regions);
   search.regions = static_cast<int>(regions.size());
-  const double h = options.edge_length;
-  const int nv = static_cast<int>(mesh.n_vertices());
-  std::vector<bool> steep(search.regions);
-  for (int r = 0; r < search.regions; ++r) {
-    steep[r] = std::abs(regions[r].normal.z()) < kSteepMaxNz;
-    search.wall_regions += steep[r] ? 1 : 0;
-  }
-  // Per vertex: the regions of its faces, and whether one of them is a roof or ground.
-  std::vector<std::vector<int>> vertex_regions(nv);
-  std::vector<bool> on_flat(nv, false);
-  for (auto f : mesh.faces()) {
-    const int r = face_region[f.idx()];
-    if (r < 0) continue;
-    for (auto v : mesh.fv_range(f)) {
-      if (!steep[r]) on_flat[v.idx()] = true;
-      std::vector<int>& list = vertex_regions[v.idx()];
-      if (std::find(list.begin(), list.end(), r) == list.end()) list.push_back(r);
-    }
-  }
-  std::vector<std::vector<int>> region_vertices(search.regions);
-  for (int v = 0; v < nv; ++v) {
-    for (int r : vertex_regions[v]) region_vertices[r].push_back(v);
-  }
-  auto point = [&](int v) { return ToEigen(mesh.point(mesh.vertex_handle(v))); };
-  const double cos_min = std::cos(135.0 * kDeg), cos_max = std::cos(45.0 * kDeg);
-  const double cos_vertical_min = std::cos((180.0 - options.min_corner_angle_deg) * kDeg);
-  const double cos_vertical_max = std::cos(options.min_corner_angle_deg * kDeg);
-  // The line where two planes meet: a point on it nearest `near`, and its direction.
-  auto meet = [](const Region& a, const Region& b, const Eigen::Vector3d& near, Eigen::Vector3d* q,
-                 Eigen::Vector3d* dir) {
-    *dir = a.normal.cross(b.normal).normalized();
-    Eigen::Matrix3d m;
-    m.row(0) = a.normal.transpose();
-    m.row(1) = b.normal.transpose();
-    m.row(2) = dir->transpose();
-    *q = m.colPivHouseholderQr().solve(Eigen::Vector3d(a.normal.dot(a.centre), b.normal.dot(b.centre), dir->dot(near)));
-  };
+  const RegionMaps maps = MapRegions(mesh, regions, face_region);
+  for (int r = 0; r < search.regions; ++r) search.wall_regions += maps.steep[r] ? 1 : 0;
   for (int i = 0; i < search.regions; ++i) {
     for (int j = i + 1; j < search.regions; ++j) {
-      if (!steep[i] && !steep[j]) continue;
-      const bool vertical = steep[i] && steep[j];
-      if (vertical ? !options.vertical : !(options.feet || options.eaves)) continue;
-      // A wall first: its normal gives the corner's orientation.
-      const int ids[2] = {steep[i] ? i : j, steep[i] ? j : i};
-      Region plane[2] = {regions[ids[0]], regions[ids[1]]};
-      const double cos_ab = plane[0].normal.dot(plane[1].normal);
-      if (cos_ab > (vertical ? cos_vertical_max : cos_max) || cos_ab < (vertical ? cos_vertical_min : cos_min))
-        continue;
-      Eigen::Vector3d q, dir;
-      meet(plane[0], plane[1], 0.5 * (plane[0].centre + plane[1].centre), &q, &dir);
-      auto off_line = [&](const Eigen::Vector3d& p) {
-        const Eigen::Vector3d d = p - q;
-        return (d - d.dot(dir) * dir).norm();
-      };
-      if (!vertical) {
-        // Feet and eaves: each plane refitted to its region's vertices near the line.
-        bool fitted = true;
-        for (int k = 0; k < 2 && fitted; ++k) {
-          std::vector<Eigen::Vector3d> near;
-          for (int v : region_vertices[ids[k]]) {
-            if (off_line(point(v)) <= options.local_fit * h) near.push_back(point(v));
-          }
-          if (static_cast<int>(near.size()) < options.min_region_faces) {
-            fitted = false;
-            break;
-          }
-          const PrincipalAxes fit = FitPrincipalAxes(near);
-          const Eigen::Vector3d n =
-              fit.Normal().dot(plane[k].normal) < 0.0 ? Eigen::Vector3d(-fit.Normal()) : fit.Normal();
-          if (steep[ids[k]] != (std::abs(n.z()) < kSteepMaxNz)) fitted = false;
-          plane[k] = {fit.centre, n};
-        }
-        if (!fitted) continue;
-        const double c = plane[0].normal.dot(plane[1].normal);
-        if (c > cos_max || c < cos_min) continue;
-        const Eigen::Vector3d near_line = q;  // not an alias of the result
-        meet(plane[0], plane[1], near_line, &q, &dir);
-      }
-      // Each region's stretch along the line (its vertices within 2 edges of it), how
-      // close it comes, and the mean of those vertices (which side of the other plane
-      // the region lies on).
-      double lo[2], hi[2], nearest[2];
-      Eigen::Vector3d beside[2];
-      for (int k = 0; k < 2; ++k) {
-        lo[k] = std::numeric_limits<double>::infinity();
-        hi[k] = -lo[k];
-        nearest[k] = lo[k];
-        beside[k].setZero();
-        int count = 0;
-        for (int v : region_vertices[ids[k]]) {
-          const Eigen::Vector3d p = point(v);
-          const double d = off_line(p);
-          nearest[k] = std::min(nearest[k], d);
-          if (d > 2.0 * h) continue;
-          const double t = (p - q).dot(dir);
-          lo[k] = std::min(lo[k], t);
-          hi[k] = std::max(hi[k], t);
-          beside[k] += p;
-          ++count;
-        }
-        if (count > 0) beside[k] /= count;
-      }
-      if (nearest[0] > 1.6 * h || nearest[1] > 1.6 * h) continue;
-      const double t0 = std::max(lo[0], lo[1]) + 0.5 * h, t1 = std::min(hi[0], hi[1]) - 0.5 * h;
-      if (t1 - t0 < 2.0 * h) continue;
       WallCorner corner;
-      corner.point = q + 0.5 * (t0 + t1) * dir;
-      corner.direction = dir;
-      corner.half_length = 0.5 * (t1 - t0);
-      for (int k = 0; k < 2; ++k) {
-        corner.normal[k] = plane[k].normal;
-        corner.centre[k] = plane[k].centre;
-      }
-      corner.convex = (beside[1] - beside[0]).dot(plane[0].normal) < 0.0;
-      corner.kind = vertical ? CreaseKind::kVertical : corner.convex ? CreaseKind::kEave : CreaseKind::kFoot;
-      if (corner.kind == CreaseKind::kFoot && !options.feet) continue;
-      if (corner.kind == CreaseKind::kEave && !options.eaves) continue;
-      for (auto vh : mesh.vertices()) {
-        if (mesh.is_boundary(vh)) continue;
-        if (vertical && on_flat[vh.idx()]) continue;
-        if (!vertical && std::any_of(vertex_regions[vh.idx()].begin(), vertex_regions[vh.idx()].end(),
-                                     [&](int r) { return r != ids[0] && r != ids[1]; }))
-          continue;
-        const Eigen::Vector3d p = ToEigen(mesh.point(vh));
-        const double t = (p - corner.point).dot(dir);
-        if (std::abs(t) > corner.half_length || off_line(p) > options.band * h) continue;
-        corner.band.push_back(vh.idx());
-      }
-      if (!corner.band.empty()) search.corners.push_back(std::move(corner));
+      if (FindCorner(mesh, options, regions, maps, i, j, &corner)) search.corners.push_back(std::move(corner));
     }
   }
   return search;
 }
 
-CornerLaying LayCornerOntoWalls(TinMesh* mesh, const WallCorner& corner, const WallCornerOptions& options) {
-  options.Check();
-  CornerLaying laying;
-  const Eigen::Vector3d& dir = corner.direction;
-  auto onto_line = [&](const Eigen::Vector3d& p) -> Eigen::Vector3d {
-    return corner.point + (p - corner.point).dot(dir) * dir;
-  };
+namespace {
+
+// The point of the corner's line nearest p.
+Eigen::Vector3d OntoCornerLine(const WallCorner& corner, const Eigen::Vector3d& p) {
+  return corner.point + (p - corner.point).dot(corner.direction) * corner.direction;
+}
+
+// Each band vertex onto the nearer wall's plane (onto the line within snap edges of it,
+// or when it would end beyond the other wall). Returns the vertices moved with where
+// they were.
+std::vector<std::pair<int, Eigen::Vector3d>> MoveBandOntoWalls(TinMesh* mesh, const WallCorner& corner,
+                                                               const WallCornerOptions& options) {
   const double snap = options.snap * options.edge_length;
   std::vector<std::pair<int, Eigen::Vector3d>> moved;  // vertex, where it was
   for (int v : corner.band) {
@@ -392,44 +444,52 @@ CornerLaying LayCornerOntoWalls(TinMesh* mesh, const WallCorner& corner, const W
     Eigen::Vector3d target = p - s[k] * corner.normal[k];
     const double other = (target - corner.centre[1 - k]).dot(corner.normal[1 - k]);
     const bool beyond = corner.convex ? other > 0.0 : other < 0.0;
-    const Eigen::Vector3d on_line = onto_line(target);
+    const Eigen::Vector3d on_line = OntoCornerLine(corner, target);
     if (beyond || (target - on_line).norm() < snap) target = on_line;
     if ((target - p).norm() < 1e-6 * options.edge_length) continue;  // on its wall already
     mesh->set_point(vh, ToOpenMesh(target));
     moved.emplace_back(v, p);
   }
-  // Two band vertices can swap sides, or three end on the line: a face around them that
-  // turned its back on the walls (against their mean normal or its neighbours), or lost
-  // its area, gets the corner that moved most back where it was, until none is left.
+  return moved;
+}
+
+// A face that lost its area (least height under 5 % of its longest edge) or turned its
+// back on the walls (against `outward`, their mean normal, or its neighbours).
+bool TurnedOrFlat(const TinMesh& mesh, TinMesh::FaceHandle f, const Eigen::Vector3d& outward) {
+  std::array<Eigen::Vector3d, 3> p;
+  int i = 0;
+  for (auto v : mesh.fv_range(f)) p[i++] = ToEigen(mesh.point(v));
+  const Eigen::Vector3d n = (p[1] - p[0]).cross(p[2] - p[0]);
+  const double longest = std::max({(p[1] - p[0]).norm(), (p[2] - p[1]).norm(), (p[0] - p[2]).norm()});
+  if (NoArea(n.norm(), longest, 0.05)) return true;
+  if (n.dot(outward) < 0.0) return true;
+  Eigen::Vector3d around = Eigen::Vector3d::Zero();
+  for (auto g : mesh.ff_range(f)) around += UnitFaceNormal(mesh, g);
+  return n.dot(around) < 0.0;
+}
+
+// Two band vertices can swap sides, or three end on the line: a face around them that
+// turned its back on the walls or lost its area gets the corner that moved most back
+// where it was, until none is left. Returns how many went back (restored[k] set).
+int PutBackWhereFacesTurn(TinMesh* mesh, const WallCorner& corner,
+                          const std::vector<std::pair<int, Eigen::Vector3d>>& moved, std::vector<char>* restored) {
   const Eigen::Vector3d outward = corner.normal[0] + corner.normal[1];
-  std::vector<char> restored(moved.size(), 0);
   std::unordered_map<int, size_t> slot;  // vertex -> its entry in moved
   for (size_t k = 0; k < moved.size(); ++k) slot[moved[k].first] = k;
-  auto bad = [&](TinMesh::FaceHandle f) {
-    std::array<Eigen::Vector3d, 3> p;
-    int i = 0;
-    for (auto v : mesh->fv_range(f)) p[i++] = ToEigen(mesh->point(v));
-    const Eigen::Vector3d n = (p[1] - p[0]).cross(p[2] - p[0]);
-    const double longest = std::max({(p[1] - p[0]).norm(), (p[2] - p[1]).norm(), (p[0] - p[2]).norm()});
-    if (NoArea(n.norm(), longest, 0.05)) return true;
-    if (n.dot(outward) < 0.0) return true;
-    Eigen::Vector3d around = Eigen::Vector3d::Zero();
-    for (auto g : mesh->ff_range(f)) around += UnitFaceNormal(*mesh, g);
-    return n.dot(around) < 0.0;
-  };
+  int left_off = 0;
   for (size_t round = 0; round < moved.size(); ++round) {
     std::vector<char> restore(moved.size(), 0);
     bool any = false;
     for (size_t k = 0; k < moved.size(); ++k) {
-      if (restored[k]) continue;
+      if ((*restored)[k]) continue;
       for (auto f : mesh->vf_range(mesh->vertex_handle(moved[k].first))) {
-        if (!bad(f)) continue;
+        if (!TurnedOrFlat(*mesh, f, outward)) continue;
         // The corner of this face that moved most (among those still moved).
         size_t worst = k;
         double most = -1.0;
         for (auto v : mesh->fv_range(f)) {
           const auto it = slot.find(v.idx());
-          if (it == slot.end() || restored[it->second]) continue;
+          if (it == slot.end() || (*restored)[it->second]) continue;
           const double d = (ToEigen(mesh->point(v)) - moved[it->second].second).norm();
           if (d > most) most = d, worst = it->second;
         }
@@ -441,16 +501,27 @@ CornerLaying LayCornerOntoWalls(TinMesh* mesh, const WallCorner& corner, const W
     for (size_t k = 0; k < moved.size(); ++k) {
       if (!restore[k]) continue;
       mesh->set_point(mesh->vertex_handle(moved[k].first), ToOpenMesh(moved[k].second));
-      restored[k] = 1;
-      ++laying.left_off;
+      (*restored)[k] = 1;
+      ++left_off;
     }
   }
+  return left_off;
+}
+
+}  // namespace
+
+CornerLaying LayCornerOntoWalls(TinMesh* mesh, const WallCorner& corner, const WallCornerOptions& options) {
+  options.Check();
+  CornerLaying laying;
+  const std::vector<std::pair<int, Eigen::Vector3d>> moved = MoveBandOntoWalls(mesh, corner, options);
+  std::vector<char> restored(moved.size(), 0);
+  laying.left_off = PutBackWhereFacesTurn(mesh, corner, moved, &restored);
   for (size_t k = 0; k < moved.size(); ++k) {
     if (restored[k]) continue;
     ++laying.moved;
     const Eigen::Vector3d p = ToEigen(mesh->point(mesh->vertex_handle(moved[k].first)));
     laying.max_move = std::max(laying.max_move, (p - moved[k].second).norm());
-    if ((p - onto_line(p)).norm() < 1e-9) ++laying.on_line;
+    if ((p - OntoCornerLine(corner, p)).norm() < 1e-9) ++laying.on_line;
   }
   return laying;
 }

@@ -1,12 +1,11 @@
-// Vertical corners where two planar walls meet (issue 7).
+// Vertical corners where two planar walls meet, and optionally wall feet and eaves.
 //
 // The adjusted walls of a thorough run are flat and in place, but a TIN from a 2.5D
 // start puts no vertex on a building's vertical corner: the faces between the last
 // vertices of one wall and the first of the next cut the corner off (0.6-0.9 m inside
 // a 12 m building's corners on block_oblique), and in a band about a metre wide the
-// faces crumple. On the thorough runs 5 % of the wall samples, those within 3 ground
-// pixels of a corner, carried 26-37 % of the walls' squared distance
-// (docs/EXPERIMENTS.md, session 32).
+// faces crumple: there 5 % of the wall samples, those within 3 ground pixels of a
+// corner, carried 26-37 % of the walls' squared distance.
 //
 // FindWallCorners grows the faces into planar regions: a face joins across an edge
 // when its normal is within region_angle_deg of its neighbour's and of the region's
@@ -16,8 +15,8 @@
 // tolerance are kept. A wall grown in pieces (its faces crumpled near a corner, a lower
 // band a few degrees off) is put together again: steep regions whose vertices come
 // within one edge of each other merge when their normals lie within region_angle_deg
-// and one plane fits both within the tolerance (merge_wall_pieces). Two steep regions (normals more than 60 degrees from +Z) whose
-// normals enclose 45-135 degrees make a corner where their planes meet when both come
+// and one plane fits both within the tolerance (merge_wall_pieces). Two steep regions
+// (normals more than 60 degrees from +Z) whose normals enclose 45-135 degrees make a corner where their planes meet when both come
 // within 1.6 edges of that line and run beside it together over at least two edges
 // (the corner spans that common stretch, half an edge short of each end, so the eave
 // and the foot stay as they are). Its band: the vertices within `band` edges of the
@@ -63,11 +62,11 @@ struct WallCornerOptions {
   bool vertical = true;    // two walls
   // Least angle between two walls' normals for a vertical corner (feet and eaves: 45).
   // A one-face chamfer cut across a right-angled corner encloses about 45 degrees with
-  // each wall and made a false corner on block_oblique (session 33: 48 degrees); 60
-  // leaves it out, and a building's corners are far steeper (session 34).
+  // each wall (a false corner at 48 degrees was seen); 60 leaves it out, and a
+  // building's corners are far steeper.
   double min_corner_angle_deg = 60.0;
   // Steep regions within an edge of each other that one plane fits merged into one wall
-  // before the pairs are formed (a wall grown in pieces near a corner; session 35).
+  // before the pairs are formed (a wall grown in pieces near a corner).
   bool merge_wall_pieces = true;
   bool feet = false;       // a wall and the gentle region at its foot (re-entrant)
   bool eaves = false;      // a wall and the roof on top of it (convex)

@@ -70,6 +70,83 @@ Hit ResolveHit(const Tessellation& tess, int s, const Eigen::Vector2d& xy, float
   return hit;
 }
 
+// Continues a ray that first hit a back face just below each back face it meets
+// (from the ray's parameter t, float, down to t_far) until it hits a front face: true
+// with that face's hit in *hit, false when it leaves the surface or meets more than
+// kMaxBackFaceSkips back faces.
+bool FrontHitBelow(RTCScene rtc_scene, const Tessellation& tessellation, const Eigen::Vector2d& xy, float org_x,
+                   float org_y, float org_z, float t, float t_far, Hit* hit) {
+  for (int k = 0; k < kMaxBackFaceSkips; ++k) {
+    RTCRayHit single;
+    single.ray.org_x = org_x;
+    single.ray.org_y = org_y;
+    single.ray.org_z = org_z;
+    single.ray.dir_x = 0.0f;
+    single.ray.dir_y = 0.0f;
+    single.ray.dir_z = -1.0f;
+    // The next float after t, plus a micrometre-scale step: a facet sharing
+    // the back face's edge is not found twice.
+    single.ray.tnear = std::nextafter(t, t_far) + 1e-6f * std::max(1.0f, t);
+    single.ray.tfar = t_far;
+    single.ray.time = 0.0f;
+    single.ray.mask = 0xFFFFFFFFu;
+    single.ray.id = 0;
+    single.ray.flags = 0;
+    single.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    single.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    single.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    RTCIntersectContext single_context;
+    rtcInitIntersectContext(&single_context);
+    rtcIntersect1(rtc_scene, &single_context, &single);
+    if (single.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    t = single.ray.tfar;
+    *hit = ResolveHit(tessellation, static_cast<int>(single.hit.primID), xy, single.hit.u, single.hit.v);
+    if (!hit->back_face) return true;
+  }
+  return false;
+}
+
+// The vertical rays of one row of the grid, cast from height z_start down to t_far
+// below it in packets of kPacket: the first hits go into *top, counts into *stats.
+void CastRow(RTCScene rtc_scene, const Tessellation& tessellation, const TopViewOptions& options, int row,
+             double z_start, float t_far, TopView* top, TopViewStats* stats) {
+  const RasterGrid& grid = top->grid;
+  alignas(64) RTCRayHit16 packet;
+  alignas(64) int valid[kPacket];
+  for (int col0 = 0; col0 < grid.width; col0 += kPacket) {
+    const int count = std::min(kPacket, grid.width - col0);
+    for (int i = 0; i < kPacket; ++i) {
+      valid[i] = i < count ? -1 : 0;
+      const Eigen::Vector2d xy = grid.PixelCentre(col0 + std::min(i, count - 1), row);
+      SetPacketRay(&packet, i, Eigen::Vector3d(xy.x(), xy.y(), z_start), Eigen::Vector3d(0, 0, -1), t_far);
+    }
+    IntersectCoherent16(valid, rtc_scene, &packet);
+
+    for (int i = 0; i < count; ++i) {
+      const int col = col0 + i;
+      const Eigen::Vector2d xy = grid.PixelCentre(col, row);
+      if (packet.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID) {
+        ++stats->misses;
+        continue;
+      }
+      Hit hit = ResolveHit(tessellation, static_cast<int>(packet.hit.primID[i]), xy, packet.hit.u[i], packet.hit.v[i]);
+      if (hit.back_face) ++stats->back_faces;
+      if (hit.back_face && options.skip_back_faces &&
+          !FrontHitBelow(rtc_scene, tessellation, xy, packet.ray.org_x[i], packet.ray.org_y[i], packet.ray.org_z[i],
+                         packet.ray.tfar[i], t_far, &hit)) {
+        ++stats->misses;
+        continue;
+      }
+      const size_t idx = top->Index(col, row);
+      top->facet[idx] = hit.facet;
+      top->u[idx] = hit.u;
+      top->v[idx] = hit.v;
+      top->z[idx] = hit.z;
+      ++stats->hits;
+    }
+  }
+}
+
 }  // namespace
 
 TopView CastTopView(const SurfaceScene& scene, const Tessellation& tessellation,
@@ -106,82 +183,12 @@ TopView CastTopView(const SurfaceScene& scene, const Tessellation& tessellation,
   const RTCScene rtc_scene = scene.get();
 
   tbb::combinable<TopViewStats> local_stats;
-  tbb::parallel_for(
-      tbb::blocked_range<int>(0, grid.height), [&](const tbb::blocked_range<int>& rows) {
-        TopViewStats& stats = local_stats.local();
-        alignas(64) RTCRayHit16 packet;
-        alignas(64) int valid[kPacket];
-        for (int row = rows.begin(); row < rows.end(); ++row) {
-          for (int col0 = 0; col0 < grid.width; col0 += kPacket) {
-            const int count = std::min(kPacket, grid.width - col0);
-            for (int i = 0; i < kPacket; ++i) {
-              valid[i] = i < count ? -1 : 0;
-              const Eigen::Vector2d xy = grid.PixelCentre(col0 + std::min(i, count - 1), row);
-              SetPacketRay(&packet, i, Eigen::Vector3d(xy.x(), xy.y(), z_start),
-                           Eigen::Vector3d(0, 0, -1), t_far);
-            }
-            IntersectCoherent16(valid, rtc_scene, &packet);
-
-            for (int i = 0; i < count; ++i) {
-              const int col = col0 + i;
-              const Eigen::Vector2d xy = grid.PixelCentre(col, row);
-              if (packet.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID) {
-                ++stats.misses;
-                continue;
-              }
-              Hit hit = ResolveHit(tessellation, static_cast<int>(packet.hit.primID[i]), xy,
-                                   packet.hit.u[i], packet.hit.v[i]);
-              if (hit.back_face) ++stats.back_faces;
-              if (hit.back_face && options.skip_back_faces) {
-                // Continue the same ray just below each back face until a front face.
-                float t = packet.ray.tfar[i];
-                bool found = false;
-                for (int k = 0; k < kMaxBackFaceSkips; ++k) {
-                  RTCRayHit single;
-                  single.ray.org_x = packet.ray.org_x[i];
-                  single.ray.org_y = packet.ray.org_y[i];
-                  single.ray.org_z = packet.ray.org_z[i];
-                  single.ray.dir_x = 0.0f;
-                  single.ray.dir_y = 0.0f;
-                  single.ray.dir_z = -1.0f;
-                  // The next float after t, plus a micrometre-scale step: a facet sharing
-                  // the back face's edge is not found twice.
-                  single.ray.tnear = std::nextafter(t, t_far) + 1e-6f * std::max(1.0f, t);
-                  single.ray.tfar = t_far;
-                  single.ray.time = 0.0f;
-                  single.ray.mask = 0xFFFFFFFFu;
-                  single.ray.id = 0;
-                  single.ray.flags = 0;
-                  single.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-                  single.hit.primID = RTC_INVALID_GEOMETRY_ID;
-                  single.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-                  RTCIntersectContext single_context;
-                  rtcInitIntersectContext(&single_context);
-                  rtcIntersect1(rtc_scene, &single_context, &single);
-                  if (single.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
-                  t = single.ray.tfar;
-                  hit = ResolveHit(tessellation, static_cast<int>(single.hit.primID), xy,
-                                   single.hit.u, single.hit.v);
-                  if (!hit.back_face) {
-                    found = true;
-                    break;
-                  }
-                }
-                if (!found) {
-                  ++stats.misses;
-                  continue;
-                }
-              }
-              const size_t idx = top.Index(col, row);
-              top.facet[idx] = hit.facet;
-              top.u[idx] = hit.u;
-              top.v[idx] = hit.v;
-              top.z[idx] = hit.z;
-              ++stats.hits;
-            }
-          }
-        }
-      });
+  tbb::parallel_for(tbb::blocked_range<int>(0, grid.height), [&](const tbb::blocked_range<int>& rows) {
+    TopViewStats& stats = local_stats.local();
+    for (int row = rows.begin(); row < rows.end(); ++row) {
+      CastRow(rtc_scene, tessellation, options, row, z_start, t_far, &top, &stats);
+    }
+  });
   scene.device().Check();
   local_stats.combine_each([&](const TopViewStats& s) {
     top.stats.hits += s.hits;

@@ -4,6 +4,7 @@
 
 #include "engine/pipeline/trial.h"
 #include "mesh/creases.h"
+#include "refine/crease_lines.h"
 
 namespace facets {
 namespace {
