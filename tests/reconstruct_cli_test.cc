@@ -117,7 +117,7 @@ TEST(ReconstructCli, ScenePresetSetsItsOptionsAndGivenOptionsWin) {
   EXPECT_NE(aerial.find("stage v-cycle 1/1"), std::string::npos);
   EXPECT_EQ(aerial.find("stage v-cycle 1/2"), std::string::npos);
   const std::string ini = FileText(dir / "aerial" / "settings.ini");
-  for (const char* key : {"scene=aerial", "wall-corners=true", "no-fold-lips=false", "v-cycles=1", "levels=2"}) {
+  for (const char* key : {"scene=\"aerial\"", "wall-corners=true", "no-fold-lips=false", "v-cycles=1", "levels=2"}) {
     EXPECT_NE(ini.find(key), std::string::npos) << key << "\n" << ini;
   }
   for (const char* name : {"level_1.ply", "level_0.ply", "level_0_creases.ply"}) {
