@@ -306,12 +306,9 @@ ImageBlock ReadColmapModel(const std::string& sparse_dir, const std::string& ima
   return block;
 }
 
-void WriteColmapModel(const ImageBlock& block, const std::string& sparse_dir) {
-  const fs::path dir(sparse_dir);
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw std::runtime_error(sparse_dir + ": cannot create folder: " + ec.message());
+namespace {
 
+std::string CamerasText(const ImageBlock& block) {
   std::string cameras =
       "# Camera list with one line of data per camera:\n"
       "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
@@ -330,7 +327,10 @@ void WriteColmapModel(const ImageBlock& block, const std::string& sparse_dir) {
     }
     cameras += '\n';
   }
+  return cameras;
+}
 
+std::string ImagesText(const ImageBlock& block) {
   std::string images =
       "# Image list with two lines of data per image:\n"
       "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n"
@@ -359,7 +359,10 @@ void WriteColmapModel(const ImageBlock& block, const std::string& sparse_dir) {
     }
     images += '\n';
   }
+  return images;
+}
 
+std::string PointsText(const ImageBlock& block) {
   std::string points =
       "# 3D point list with one line of data per point:\n"
       "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n"
@@ -386,7 +389,19 @@ void WriteColmapModel(const ImageBlock& block, const std::string& sparse_dir) {
     }
     points += '\n';
   }
+  return points;
+}
 
+}  // namespace
+
+void WriteColmapModel(const ImageBlock& block, const std::string& sparse_dir) {
+  const fs::path dir(sparse_dir);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw std::runtime_error(sparse_dir + ": cannot create folder: " + ec.message());
+  const std::string cameras = CamerasText(block);
+  const std::string images = ImagesText(block);
+  const std::string points = PointsText(block);
   WriteFileAtomically((dir / "cameras.txt").string(), cameras);
   WriteFileAtomically((dir / "images.txt").string(), images);
   WriteFileAtomically((dir / "points3D.txt").string(), points);

@@ -10,12 +10,14 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "io/shared_data_for_testing.h"
+
 namespace facets {
 namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kData = std::string(FACETS_SHARED_DIR) + "/data/";
+const std::string kData = SharedDataDir();
 
 struct ModelCounts {
   int cameras = 0, images = 0, points = 0;
@@ -91,6 +93,10 @@ TEST(ColmapIoTest, ReadsTheRealModels) {
        "PINHOLE", 1.5},
   };
   for (const RealModel& m : models) {
+    FACETS_SKIP_WITHOUT_SHARED_DATA(m.sparse);
+    FACETS_SKIP_WITHOUT_SHARED_DATA(m.images);
+  }
+  for (const RealModel& m : models) {
     const std::string sparse = kData + m.sparse;
     const ModelCounts expected = CountLines(sparse);
     const ImageBlock block = ReadColmapModel(sparse, kData + m.images);
@@ -121,6 +127,7 @@ TEST(ColmapIoTest, ReadsTheRealModels) {
 }
 
 TEST(ColmapIoTest, BoruszynDetails) {
+  FACETS_SKIP_WITHOUT_SHARED_DATA("boruszyn_kap/sparse_georef_local2180");
   const ImageBlock block = ReadColmapModel(kData + "boruszyn_kap/sparse_georef_local2180");
   ASSERT_EQ(block.cameras.size(), 1u);
   const Camera& camera = block.cameras.at(1);
@@ -145,6 +152,7 @@ TEST(ColmapIoTest, BoruszynDetails) {
 }
 
 TEST(ColmapIoTest, WriteReadRoundTripIsExact) {
+  FACETS_SKIP_WITHOUT_SHARED_DATA("boruszyn_kap/sparse_georef_local2180");
   const ImageBlock block = ReadColmapModel(kData + "boruszyn_kap/sparse_georef_local2180");
   const fs::path dir = TempDir("colmap_roundtrip") / "sparse";
   WriteColmapModel(block, dir.string());
@@ -186,6 +194,7 @@ TEST(ColmapIoTest, WriteReadRoundTripIsExact) {
 }
 
 TEST(ColmapIoTest, MissingImageFileIsNamed) {
+  FACETS_SKIP_WITHOUT_SHARED_DATA("strecha_fountain-P11/sparse");
   const fs::path dir = TempDir("colmap_missing_image");
   try {
     ReadColmapModel(kData + "strecha_fountain-P11/sparse", dir.string());

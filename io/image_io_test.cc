@@ -10,6 +10,8 @@
 #include <iostream>
 #include <stdexcept>
 
+#include "io/shared_data_for_testing.h"
+
 namespace facets {
 namespace {
 
@@ -231,13 +233,15 @@ TEST_F(ImageIoTest, ErrorsNameTheFile) {
 
 // The real images load in their raw layout and match their cameras.
 TEST_F(ImageIoTest, ReadsRealImages) {
-  const std::string data = std::string(FACETS_SHARED_DIR) + "/data/";
+  const std::string data = SharedDataDir();
   struct Case {
     const char* file;
     int width, height;
   };
-  for (const Case& c : {Case{"boruszyn_kap/images/img_4977.jpg", 1152, 864},
-                        Case{"middlebury_templeSparseRing/images/templeSR0001.png", 640, 480}}) {
+  const Case cases[] = {{"boruszyn_kap/images/img_4977.jpg", 1152, 864},
+                        {"middlebury_templeSparseRing/images/templeSR0001.png", 640, 480}};
+  for (const Case& c : cases) FACETS_SKIP_WITHOUT_SHARED_DATA(c.file);
+  for (const Case& c : cases) {
     const ImagePlanes image = ReadImage(data + c.file);
     const ImagePlanes grey = image.Grey();
     double mean = 0;

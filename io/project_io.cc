@@ -171,8 +171,199 @@ Camera ReadCamera(const Reader& r, const json& node, const std::string& path) {
   return camera;
 }
 
-
 json Array3(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); }
+
+// Checks format, version and rotation convention; returns radians per angle unit.
+double ReadProjectConventions(const Reader& r, const json& root) {
+  if (!root.is_object()) r.Fail("(top level)", "is not an object");
+  if (r.String(r.Field(root, "", "format"), "format") != "facets-project") {
+    r.Fail("format", "must be \"facets-project\"");
+  }
+  if (r.Integer(r.Field(root, "", "version"), "version") != 1) {
+    r.Fail("version", "is not supported (this reader knows version 1)");
+  }
+  std::string unit = "deg";
+  if (const json* u = r.Optional(root, "angle_unit")) unit = r.String(*u, "angle_unit");
+  if (unit != "deg" && unit != "gon") r.Fail("angle_unit", "must be \"deg\" or \"gon\"");
+  if (const json* rot = r.Optional(root, "rotation")) {
+    if (r.String(*rot, "rotation") != "omega-phi-kappa") {
+      r.Fail("rotation", "must be \"omega-phi-kappa\"");
+    }
+  }
+  return RadiansPerUnit(unit);
+}
+
+// One image: id, path (relative to `dir`), camera and rotation from omega, phi, kappa
+// (radians after `to_rad`); its global projection centre (m) goes to *centre, the
+// translation is set once the origin is known.
+BlockImage ReadImage(const Reader& r, const json& node, const std::string& ipath,
+                     const fs::path& dir, double to_rad, const ImageBlock& block,
+                     std::set<int>* image_ids, Eigen::Vector3d* centre) {
+  BlockImage image;
+  image.image_id =
+      static_cast<int>(r.Integer(r.Field(node, ipath, "id"), Reader::Join(ipath, "id")));
+  if (!image_ids->insert(image.image_id).second) {
+    r.Fail(ipath + ".id", "duplicates image id " + std::to_string(image.image_id));
+  }
+  image.name = r.String(r.Field(node, ipath, "path"), Reader::Join(ipath, "path"));
+  image.path = (dir / image.name).lexically_normal().string();
+  image.camera_id = static_cast<int>(
+      r.Integer(r.Field(node, ipath, "camera"), Reader::Join(ipath, "camera")));
+  if (!block.cameras.count(image.camera_id)) {
+    r.Fail(ipath + ".camera", "refers to unknown camera " + std::to_string(image.camera_id));
+  }
+  *centre = r.Vector3(r.Field(node, ipath, "projection_centre"), ipath + ".projection_centre");
+  const double omega = r.NumberField(node, ipath, "omega") * to_rad;
+  const double phi = r.NumberField(node, ipath, "phi") * to_rad;
+  const double kappa = r.NumberField(node, ipath, "kappa") * to_rad;
+  const Eigen::Matrix3d object_from_photo = RotationX(omega) * RotationY(phi) * RotationZ(kappa);
+  const Eigen::Matrix3d cam_from_world = kPhotoToCam * object_from_photo.transpose();
+  image.cam_from_world.rotation = Eigen::Quaterniond(cam_from_world).normalized();
+  return image;
+}
+
+// The given origin, else the mean projection centre horizontally rounded to whole
+// kilometres (readable, and small enough that floats keep millimetres over a block) with
+// Z = 0 so local heights stay heights; zero without images.
+Eigen::Vector3d ReadOrigin(const Reader& r, const json& root,
+                           const std::vector<Eigen::Vector3d>& centres) {
+  if (const json* o = r.Optional(root, "origin")) return r.Vector3(*o, "origin");
+  if (centres.empty()) return Eigen::Vector3d::Zero();
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& c : centres) mean += c;
+  mean /= static_cast<double>(centres.size());
+  return {std::round(mean.x() / 1000.0) * 1000.0, std::round(mean.y() / 1000.0) * 1000.0, 0.0};
+}
+
+// "track": [[image_id, point2d_idx], ...], every image id known.
+std::vector<TrackElement> ReadTrack(const Reader& r, const json& track, const std::string& tpath,
+                                    const std::set<int>& image_ids) {
+  r.Array(track, tpath);
+  std::vector<TrackElement> elements;
+  for (size_t k = 0; k < track.size(); ++k) {
+    const std::string epath = Reader::Index(tpath, k);
+    const json& e = track[k];
+    if (!e.is_array() || e.size() != 2) r.Fail(epath, "is not [image_id, point2d_idx]");
+    TrackElement element;
+    element.image_id = static_cast<int>(r.Integer(e[0], epath + "[0]"));
+    element.point2d_idx = static_cast<int>(r.Integer(e[1], epath + "[1]"));
+    if (!image_ids.count(element.image_id)) {
+      r.Fail(epath + "[0]", "refers to unknown image " + std::to_string(element.image_id));
+    }
+    elements.push_back(element);
+  }
+  return elements;
+}
+
+// One tie point: global xyz (m) made local by subtracting `origin`.
+TiePoint ReadTiePoint(const Reader& r, const json& node, const std::string& ppath,
+                      const Eigen::Vector3d& origin, const std::set<int>& image_ids,
+                      std::set<long long>* point_ids) {
+  TiePoint point;
+  point.point3d_id = r.Integer(r.Field(node, ppath, "id"), ppath + ".id");
+  if (!point_ids->insert(point.point3d_id).second) {
+    r.Fail(ppath + ".id", "duplicates tie point id " + std::to_string(point.point3d_id));
+  }
+  point.xyz = r.Vector3(r.Field(node, ppath, "xyz"), ppath + ".xyz") - origin;
+  if (const json* rgb = r.Optional(node, "rgb")) {
+    if (!rgb->is_array() || rgb->size() != 3) r.Fail(ppath + ".rgb", "is not [r, g, b]");
+    for (int c = 0; c < 3; ++c) {
+      point.rgb[c] = static_cast<int>(r.Integer((*rgb)[c], Reader::Index(ppath + ".rgb", c)));
+    }
+  }
+  if (const json* e = r.Optional(node, "error")) point.error = r.Number(*e, ppath + ".error");
+  if (const json* track = r.Optional(node, "track")) {
+    point.track = ReadTrack(r, *track, ppath + ".track", image_ids);
+  }
+  return point;
+}
+
+// Region of interest and mean terrain height, both made local.
+void ReadRegionAndHeight(const Reader& r, const json& root, ImageBlock* block) {
+  if (const json* roi = r.Optional(root, "region_of_interest")) {
+    RegionOfInterest region;
+    region.min = r.Vector3(r.Field(*roi, "region_of_interest", "min"), "region_of_interest.min") -
+                 block->origin;
+    region.max = r.Vector3(r.Field(*roi, "region_of_interest", "max"), "region_of_interest.max") -
+                 block->origin;
+    if (!(region.min.array() <= region.max.array()).all()) {
+      r.Fail("region_of_interest", "has min > max");
+    }
+    block->roi = region;
+  }
+  if (const json* h = r.Optional(root, "mean_terrain_height")) {
+    block->mean_height = r.Number(*h, "mean_terrain_height") - block->origin.z();
+  }
+}
+
+json CameraJson(int id, const Camera& camera) {
+  camera.Check();
+  // Without a physical pixel size the file states pixel_size_um = 1: focal lengths
+  // and offsets in mm are then pixels / 1000, and reading gives the same pixels.
+  const double pixel_um = camera.pixel_size_um > 0 ? camera.pixel_size_um : 1.0;
+  const double mm_per_px = pixel_um / 1000.0;
+  json node;
+  node["id"] = id;
+  node["model"] = CameraModelName(camera.model);
+  if (camera.FocalX() == camera.FocalY()) {
+    node["focal_length_mm"] = camera.FocalX() * mm_per_px;
+  } else {
+    node["focal_length_mm"] = {camera.FocalX() * mm_per_px, camera.FocalY() * mm_per_px};
+  }
+  node["pixel_size_um"] = pixel_um;
+  node["principal_point_offset_mm"] = {(camera.PrincipalX() - 0.5 * camera.width) * mm_per_px,
+                                       (0.5 * camera.height - camera.PrincipalY()) * mm_per_px};
+  node["width_px"] = camera.width;
+  node["height_px"] = camera.height;
+  const int first = NumFocalAndPrincipal(camera.model);
+  if (static_cast<int>(camera.params.size()) > first) {
+    node["distortion"] = std::vector<double>(camera.params.begin() + first, camera.params.end());
+  }
+  return node;
+}
+
+// An image with its path relative to `dir`, its global projection centre and omega,
+// phi, kappa in degrees.
+json ImageJson(const BlockImage& image, const Eigen::Vector3d& origin, const fs::path& dir) {
+  constexpr double kDegrees = 180.0 / std::numbers::pi;
+  const Eigen::Matrix3d object_from_photo =
+      image.cam_from_world.rotation.toRotationMatrix().transpose() * kPhotoToCam;
+  const Eigen::Matrix3d& R = object_from_photo;
+  // R = R_x(omega) R_y(phi) R_z(kappa): r13 = sin(phi), r23 = -sin(omega) cos(phi),
+  // r33 = cos(omega) cos(phi), r12 = -cos(phi) sin(kappa), r11 = cos(phi) cos(kappa).
+  const double phi = std::atan2(R(0, 2), std::hypot(R(0, 0), R(0, 1)));
+  const double omega = std::atan2(-R(1, 2), R(2, 2));
+  const double kappa = std::atan2(-R(0, 1), R(0, 0));
+  std::string file = image.name;
+  if (!image.path.empty()) {
+    file = fs::absolute(fs::path(image.path)).lexically_normal().lexically_relative(dir)
+               .generic_string();
+    if (file.empty()) file = image.path;
+  }
+  json node;
+  node["id"] = image.image_id;
+  node["path"] = file;
+  node["camera"] = image.camera_id;
+  node["projection_centre"] = Array3(image.ProjectionCentre() + origin);
+  node["omega"] = omega * kDegrees + 0.0;  // no "-0.0"
+  node["phi"] = phi * kDegrees + 0.0;  // no "-0.0"
+  node["kappa"] = kappa * kDegrees + 0.0;  // no "-0.0"
+  return node;
+}
+
+json TiePointsJson(const std::vector<TiePoint>& tie_points, const Eigen::Vector3d& origin) {
+  json points = json::array();
+  for (const TiePoint& point : tie_points) {
+    json track = json::array();
+    for (const TrackElement& e : point.track) track.push_back({e.image_id, e.point2d_idx});
+    points.push_back({{"id", point.point3d_id},
+                      {"xyz", Array3(point.xyz + origin)},
+                      {"rgb", {point.rgb.x(), point.rgb.y(), point.rgb.z()}},
+                      {"error", point.error},
+                      {"track", track}});
+  }
+  return points;
+}
 
 }  // namespace
 
@@ -186,22 +377,7 @@ ImageBlock ReadProject(const std::string& path) {
     throw std::runtime_error(path + ": not valid JSON: " + e.what());
   }
   const Reader r(path);
-  if (!root.is_object()) r.Fail("(top level)", "is not an object");
-  if (r.String(r.Field(root, "", "format"), "format") != "facets-project") {
-    r.Fail("format", "must be \"facets-project\"");
-  }
-  if (r.Integer(r.Field(root, "", "version"), "version") != 1) {
-    r.Fail("version", "is not supported (this reader knows version 1)");
-  }
-  std::string unit = "deg";
-  if (const json* u = r.Optional(root, "angle_unit")) unit = r.String(*u, "angle_unit");
-  if (unit != "deg" && unit != "gon") r.Fail("angle_unit", "must be \"deg\" or \"gon\"");
-  const double to_rad = RadiansPerUnit(unit);
-  if (const json* rot = r.Optional(root, "rotation")) {
-    if (r.String(*rot, "rotation") != "omega-phi-kappa") {
-      r.Fail("rotation", "must be \"omega-phi-kappa\"");
-    }
-  }
+  const double to_rad = ReadProjectConventions(r, root);
 
   ImageBlock block;
   if (const json* crs = r.Optional(root, "crs")) block.crs = r.String(*crs, "crs");
@@ -217,104 +393,26 @@ ImageBlock ReadProject(const std::string& path) {
 
   // Global projection centres first: the origin may be derived from them.
   const json& images = r.Array(r.Field(root, "", "images"), "images");
-  std::vector<Eigen::Vector3d> centres;
+  std::vector<Eigen::Vector3d> centres(images.size());
   std::set<int> image_ids;
   const fs::path dir = fs::path(path).parent_path();
   for (size_t i = 0; i < images.size(); ++i) {
-    const std::string ipath = Reader::Index("images", i);
-    const json& node = images[i];
-    BlockImage image;
-    image.image_id =
-        static_cast<int>(r.Integer(r.Field(node, ipath, "id"), Reader::Join(ipath, "id")));
-    if (!image_ids.insert(image.image_id).second) {
-      r.Fail(ipath + ".id", "duplicates image id " + std::to_string(image.image_id));
-    }
-    image.name = r.String(r.Field(node, ipath, "path"), Reader::Join(ipath, "path"));
-    image.path = (dir / image.name).lexically_normal().string();
-    image.camera_id = static_cast<int>(
-        r.Integer(r.Field(node, ipath, "camera"), Reader::Join(ipath, "camera")));
-    if (!block.cameras.count(image.camera_id)) {
-      r.Fail(ipath + ".camera", "refers to unknown camera " + std::to_string(image.camera_id));
-    }
-    centres.push_back(
-        r.Vector3(r.Field(node, ipath, "projection_centre"), ipath + ".projection_centre"));
-    const double omega = r.NumberField(node, ipath, "omega") * to_rad;
-    const double phi = r.NumberField(node, ipath, "phi") * to_rad;
-    const double kappa = r.NumberField(node, ipath, "kappa") * to_rad;
-    const Eigen::Matrix3d object_from_photo = RotationX(omega) * RotationY(phi) * RotationZ(kappa);
-    const Eigen::Matrix3d cam_from_world = kPhotoToCam * object_from_photo.transpose();
-    image.cam_from_world.rotation = Eigen::Quaterniond(cam_from_world).normalized();
-    block.images.push_back(std::move(image));
+    block.images.push_back(ReadImage(r, images[i], Reader::Index("images", i), dir, to_rad,
+                                     block, &image_ids, &centres[i]));
   }
-
-  if (const json* o = r.Optional(root, "origin")) {
-    block.origin = r.Vector3(*o, "origin");
-  } else if (!centres.empty()) {
-    // Mean projection centre, horizontally rounded to whole kilometres (readable and
-    // small enough that floats keep millimetres over a block), Z = 0 so local heights
-    // stay heights.
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (const auto& c : centres) mean += c;
-    mean /= static_cast<double>(centres.size());
-    block.origin = {std::round(mean.x() / 1000.0) * 1000.0,
-                    std::round(mean.y() / 1000.0) * 1000.0, 0.0};
-  }
+  block.origin = ReadOrigin(r, root, centres);
   for (size_t i = 0; i < block.images.size(); ++i) {
     Rigid3d& pose = block.images[i].cam_from_world;
     pose.translation = -(pose.rotation * (centres[i] - block.origin));
   }
-
-  if (const json* roi = r.Optional(root, "region_of_interest")) {
-    RegionOfInterest region;
-    region.min = r.Vector3(r.Field(*roi, "region_of_interest", "min"), "region_of_interest.min") -
-                 block.origin;
-    region.max = r.Vector3(r.Field(*roi, "region_of_interest", "max"), "region_of_interest.max") -
-                 block.origin;
-    if (!(region.min.array() <= region.max.array()).all()) {
-      r.Fail("region_of_interest", "has min > max");
-    }
-    block.roi = region;
-  }
-  if (const json* h = r.Optional(root, "mean_terrain_height")) {
-    block.mean_height = r.Number(*h, "mean_terrain_height") - block.origin.z();
-  }
+  ReadRegionAndHeight(r, root, &block);
 
   if (const json* points = r.Optional(root, "tie_points")) {
     r.Array(*points, "tie_points");
     std::set<long long> point_ids;
     for (size_t i = 0; i < points->size(); ++i) {
-      const std::string ppath = Reader::Index("tie_points", i);
-      const json& node = (*points)[i];
-      TiePoint point;
-      point.point3d_id = r.Integer(r.Field(node, ppath, "id"), ppath + ".id");
-      if (!point_ids.insert(point.point3d_id).second) {
-        r.Fail(ppath + ".id", "duplicates tie point id " + std::to_string(point.point3d_id));
-      }
-      point.xyz = r.Vector3(r.Field(node, ppath, "xyz"), ppath + ".xyz") - block.origin;
-      if (const json* rgb = r.Optional(node, "rgb")) {
-        if (!rgb->is_array() || rgb->size() != 3) r.Fail(ppath + ".rgb", "is not [r, g, b]");
-        for (int c = 0; c < 3; ++c) {
-          point.rgb[c] = static_cast<int>(r.Integer((*rgb)[c], Reader::Index(ppath + ".rgb", c)));
-        }
-      }
-      if (const json* e = r.Optional(node, "error")) point.error = r.Number(*e, ppath + ".error");
-      if (const json* track = r.Optional(node, "track")) {
-        const std::string tpath = ppath + ".track";
-        r.Array(*track, tpath);
-        for (size_t k = 0; k < track->size(); ++k) {
-          const std::string epath = Reader::Index(tpath, k);
-          const json& e = (*track)[k];
-          if (!e.is_array() || e.size() != 2) r.Fail(epath, "is not [image_id, point2d_idx]");
-          TrackElement element;
-          element.image_id = static_cast<int>(r.Integer(e[0], epath + "[0]"));
-          element.point2d_idx = static_cast<int>(r.Integer(e[1], epath + "[1]"));
-          if (!image_ids.count(element.image_id)) {
-            r.Fail(epath + "[0]", "refers to unknown image " + std::to_string(element.image_id));
-          }
-          point.track.push_back(element);
-        }
-      }
-      block.points.push_back(std::move(point));
+      block.points.push_back(ReadTiePoint(r, (*points)[i], Reader::Index("tie_points", i),
+                                          block.origin, image_ids, &point_ids));
     }
   }
   return block;
@@ -333,78 +431,15 @@ void WriteProject(const ImageBlock& block, const std::string& path) {
     root["region_of_interest"] = {{"min", Array3(block.roi->min + block.origin)},
                                   {"max", Array3(block.roi->max + block.origin)}};
   }
-
   json cameras = json::array();
-  for (const auto& [id, camera] : block.cameras) {
-    camera.Check();
-    // Without a physical pixel size the file states pixel_size_um = 1: focal lengths
-    // and offsets in mm are then pixels / 1000, and reading gives the same pixels.
-    const double pixel_um = camera.pixel_size_um > 0 ? camera.pixel_size_um : 1.0;
-    const double mm_per_px = pixel_um / 1000.0;
-    json node;
-    node["id"] = id;
-    node["model"] = CameraModelName(camera.model);
-    if (camera.FocalX() == camera.FocalY()) {
-      node["focal_length_mm"] = camera.FocalX() * mm_per_px;
-    } else {
-      node["focal_length_mm"] = {camera.FocalX() * mm_per_px, camera.FocalY() * mm_per_px};
-    }
-    node["pixel_size_um"] = pixel_um;
-    node["principal_point_offset_mm"] = {(camera.PrincipalX() - 0.5 * camera.width) * mm_per_px,
-                                         (0.5 * camera.height - camera.PrincipalY()) * mm_per_px};
-    node["width_px"] = camera.width;
-    node["height_px"] = camera.height;
-    const int first = NumFocalAndPrincipal(camera.model);
-    if (static_cast<int>(camera.params.size()) > first) {
-      node["distortion"] = std::vector<double>(camera.params.begin() + first, camera.params.end());
-    }
-    cameras.push_back(node);
-  }
+  for (const auto& [id, camera] : block.cameras) cameras.push_back(CameraJson(id, camera));
   root["cameras"] = cameras;
 
   const fs::path dir = fs::absolute(fs::path(path)).lexically_normal().parent_path();
   json images = json::array();
-  constexpr double kDegrees = 180.0 / std::numbers::pi;
-  for (const BlockImage& image : block.images) {
-    const Eigen::Matrix3d object_from_photo =
-        image.cam_from_world.rotation.toRotationMatrix().transpose() * kPhotoToCam;
-    const Eigen::Matrix3d& R = object_from_photo;
-    // R = R_x(omega) R_y(phi) R_z(kappa): r13 = sin(phi), r23 = -sin(omega) cos(phi),
-    // r33 = cos(omega) cos(phi), r12 = -cos(phi) sin(kappa), r11 = cos(phi) cos(kappa).
-    const double phi = std::atan2(R(0, 2), std::hypot(R(0, 0), R(0, 1)));
-    const double omega = std::atan2(-R(1, 2), R(2, 2));
-    const double kappa = std::atan2(-R(0, 1), R(0, 0));
-    std::string file = image.name;
-    if (!image.path.empty()) {
-      file = fs::absolute(fs::path(image.path)).lexically_normal().lexically_relative(dir)
-                 .generic_string();
-      if (file.empty()) file = image.path;
-    }
-    json node;
-    node["id"] = image.image_id;
-    node["path"] = file;
-    node["camera"] = image.camera_id;
-    node["projection_centre"] = Array3(image.ProjectionCentre() + block.origin);
-    node["omega"] = omega * kDegrees + 0.0;  // no "-0.0"
-    node["phi"] = phi * kDegrees + 0.0;  // no "-0.0"
-    node["kappa"] = kappa * kDegrees + 0.0;  // no "-0.0"
-    images.push_back(node);
-  }
+  for (const BlockImage& image : block.images) images.push_back(ImageJson(image, block.origin, dir));
   root["images"] = images;
-
-  if (!block.points.empty()) {
-    json points = json::array();
-    for (const TiePoint& point : block.points) {
-      json track = json::array();
-      for (const TrackElement& e : point.track) track.push_back({e.image_id, e.point2d_idx});
-      points.push_back({{"id", point.point3d_id},
-                        {"xyz", Array3(point.xyz + block.origin)},
-                        {"rgb", {point.rgb.x(), point.rgb.y(), point.rgb.z()}},
-                        {"error", point.error},
-                        {"track", track}});
-    }
-    root["tie_points"] = points;
-  }
+  if (!block.points.empty()) root["tie_points"] = TiePointsJson(block.points, block.origin);
   WriteFileAtomically(path, root.dump(2) + "\n");
 }
 

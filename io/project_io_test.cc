@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "io/colmap_io.h"
+#include "io/shared_data_for_testing.h"
 
 namespace facets {
 namespace {
@@ -217,9 +218,11 @@ TEST(ProjectIoTest, ReadWriteReadRoundTrip) {
 // A COLMAP block (no pixel size: written with pixel_size_um = 1) through the project
 // file: every tie point must project to the same pixel as before.
 TEST(ProjectIoTest, ColmapBlockThroughProjectFile) {
-  const std::string data = std::string(FACETS_SHARED_DIR) + "/data/";
-  for (const char* sparse : {"boruszyn_kap/sparse_georef_local2180",
-                             "strecha_fountain-P11/sparse_with_points"}) {
+  const std::string data = SharedDataDir();
+  const char* const models[] = {"boruszyn_kap/sparse_georef_local2180",
+                                "strecha_fountain-P11/sparse_with_points"};
+  for (const char* sparse : models) FACETS_SKIP_WITHOUT_SHARED_DATA(sparse);
+  for (const char* sparse : models) {
     const ImageBlock colmap = ReadColmapModel(data + sparse);
     const fs::path dir = TempDir("project_colmap");
     WriteProject(colmap, (dir / "block.json").string());

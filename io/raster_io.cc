@@ -165,6 +165,81 @@ std::vector<T> ConvertBand(const Raster& raster, int band) {
   return out;
 }
 
+// GTiff creation options: tiles for rasters larger than one tile, the compression with
+// its predictor (floating point or horizontal differencing), BigTIFF when needed, pixel
+// interleaving for several bands and RGB photometric for 8/16-bit colour.
+void SetCreateOptions(const Raster& raster, const RasterWriteOptions& options,
+                      CPLStringList* create_options) {
+  const RasterGrid& grid = raster.grid;
+  const bool is_float = raster.type == RasterType::kFloat32;
+  const int tile = options.tile_size;
+  // Tiny rasters stay striped: a 256 x 256 tile for a 20 x 20 raster wastes space.
+  if (grid.width > tile || grid.height > tile) {
+    create_options->SetNameValue("TILED", "YES");
+    create_options->SetNameValue("BLOCKXSIZE", std::to_string(tile).c_str());
+    create_options->SetNameValue("BLOCKYSIZE", std::to_string(tile).c_str());
+  }
+  create_options->SetNameValue("COMPRESS", options.compression.c_str());
+  if (options.compression != "NONE") {
+    create_options->SetNameValue("PREDICTOR", is_float ? "3" : "2");
+  }
+  create_options->SetNameValue("BIGTIFF", "IF_SAFER");
+  if (raster.bands > 1) create_options->SetNameValue("INTERLEAVE", "PIXEL");
+  if (raster.bands == 3 && raster.type != RasterType::kFloat32) {
+    create_options->SetNameValue("PHOTOMETRIC", "RGB");
+  }
+}
+
+// Band b (0-based) of the raster in its own type.
+CPLErr WriteBand(GDALRasterBand* band, const Raster& raster, int b) {
+  const RasterGrid& grid = raster.grid;
+  const size_t n = static_cast<size_t>(grid.NumPixels());
+  switch (raster.type) {
+    case RasterType::kUInt8: {
+      std::vector<uint8_t> buf = ConvertBand<uint8_t>(raster, b);
+      return band->RasterIO(GF_Write, 0, 0, grid.width, grid.height, buf.data(), grid.width,
+                            grid.height, GDT_Byte, 0, 0);
+    }
+    case RasterType::kUInt16: {
+      std::vector<uint16_t> buf = ConvertBand<uint16_t>(raster, b);
+      return band->RasterIO(GF_Write, 0, 0, grid.width, grid.height, buf.data(), grid.width,
+                            grid.height, GDT_UInt16, 0, 0);
+    }
+    case RasterType::kFloat32:
+      return band->RasterIO(GF_Write, 0, 0, grid.width, grid.height,
+                            const_cast<float*>(raster.data.data() + b * n), grid.width,
+                            grid.height, GDT_Float32, 0, 0);
+  }
+  return CE_None;
+}
+
+// The geotransform and CRS (when the georeference has a CRS), nodata and every band;
+// returns what failed, "" when all was written.
+std::string WriteDatasetContents(GDALDataset* ds, const Raster& raster, const GeoReference& geo,
+                                 OGRSpatialReference* srs) {
+  const RasterGrid& grid = raster.grid;
+  std::string error;
+  if (!geo.crs.empty()) {
+    double gt[6] = {geo.origin.x() + grid.x0, grid.pixel_size, 0.0, geo.origin.y() + grid.y0, 0.0,
+                    -grid.pixel_size};
+    if (ds->SetGeoTransform(gt) != CE_None) error = "cannot set the geotransform" + GdalMessage();
+    if (error.empty() && ds->SetSpatialRef(srs) != CE_None) {
+      error = "cannot set the CRS" + GdalMessage();
+    }
+  }
+  for (int b = 0; b < raster.bands && error.empty(); ++b) {
+    GDALRasterBand* band = ds->GetRasterBand(b + 1);
+    if (raster.nodata && band->SetNoDataValue(*raster.nodata) != CE_None) {
+      error = "cannot set nodata" + GdalMessage();
+      break;
+    }
+    if (WriteBand(band, raster, b) != CE_None) {
+      error = "cannot write band " + std::to_string(b + 1) + GdalMessage();
+    }
+  }
+  return error;
+}
+
 }  // namespace
 
 std::string WorldFilePath(const std::string& tiff_path) {
@@ -207,26 +282,9 @@ void WriteGeoTiff(const std::string& path, const Raster& raster, const GeoRefere
 
   GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
   if (!driver) throw std::runtime_error(path + ": GDAL has no GTiff driver");
-
   const RasterGrid& grid = raster.grid;
-  const bool is_float = raster.type == RasterType::kFloat32;
-  const int tile = options.tile_size;
   CPLStringList create_options;
-  // Tiny rasters stay striped: a 256 x 256 tile for a 20 x 20 raster wastes space.
-  if (grid.width > tile || grid.height > tile) {
-    create_options.SetNameValue("TILED", "YES");
-    create_options.SetNameValue("BLOCKXSIZE", std::to_string(tile).c_str());
-    create_options.SetNameValue("BLOCKYSIZE", std::to_string(tile).c_str());
-  }
-  create_options.SetNameValue("COMPRESS", options.compression.c_str());
-  if (options.compression != "NONE") {
-    create_options.SetNameValue("PREDICTOR", is_float ? "3" : "2");
-  }
-  create_options.SetNameValue("BIGTIFF", "IF_SAFER");
-  if (raster.bands > 1) create_options.SetNameValue("INTERLEAVE", "PIXEL");
-  if (raster.bands == 3 && raster.type != RasterType::kFloat32) {
-    create_options.SetNameValue("PHOTOMETRIC", "RGB");
-  }
+  SetCreateOptions(raster, options, &create_options);
 
   const std::string tmp = path + ".tmp";
   const std::string tmp_aux = tmp + ".aux.xml";
@@ -234,45 +292,7 @@ void WriteGeoTiff(const std::string& path, const Raster& raster, const GeoRefere
   GDALDataset* ds = driver->Create(tmp.c_str(), grid.width, grid.height, raster.bands,
                                    GdalType(raster.type), create_options.List());
   if (!ds) throw std::runtime_error(path + ": cannot create '" + tmp + "'" + GdalMessage());
-
-  std::string error;
-  if (!geo.crs.empty()) {
-    double gt[6] = {geo.origin.x() + grid.x0, grid.pixel_size, 0.0, geo.origin.y() + grid.y0, 0.0,
-                    -grid.pixel_size};
-    if (ds->SetGeoTransform(gt) != CE_None) error = "cannot set the geotransform" + GdalMessage();
-    if (error.empty() && ds->SetSpatialRef(&srs) != CE_None) {
-      error = "cannot set the CRS" + GdalMessage();
-    }
-  }
-  const size_t n = static_cast<size_t>(grid.NumPixels());
-  for (int b = 0; b < raster.bands && error.empty(); ++b) {
-    GDALRasterBand* band = ds->GetRasterBand(b + 1);
-    if (raster.nodata && band->SetNoDataValue(*raster.nodata) != CE_None) {
-      error = "cannot set nodata" + GdalMessage();
-      break;
-    }
-    CPLErr err = CE_None;
-    switch (raster.type) {
-      case RasterType::kUInt8: {
-        std::vector<uint8_t> buf = ConvertBand<uint8_t>(raster, b);
-        err = band->RasterIO(GF_Write, 0, 0, grid.width, grid.height, buf.data(), grid.width,
-                             grid.height, GDT_Byte, 0, 0);
-        break;
-      }
-      case RasterType::kUInt16: {
-        std::vector<uint16_t> buf = ConvertBand<uint16_t>(raster, b);
-        err = band->RasterIO(GF_Write, 0, 0, grid.width, grid.height, buf.data(), grid.width,
-                             grid.height, GDT_UInt16, 0, 0);
-        break;
-      }
-      case RasterType::kFloat32:
-        err = band->RasterIO(GF_Write, 0, 0, grid.width, grid.height,
-                             const_cast<float*>(raster.data.data() + b * n), grid.width,
-                             grid.height, GDT_Float32, 0, 0);
-        break;
-    }
-    if (err != CE_None) error = "cannot write band " + std::to_string(b + 1) + GdalMessage();
-  }
+  std::string error = WriteDatasetContents(ds, raster, geo, &srs);
   // GDAL 3.6's GDALClose returns nothing: a failure while flushing (disk full) shows
   // only as a CE_Failure in the error state.
   CPLErrorReset();

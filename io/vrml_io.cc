@@ -40,6 +40,100 @@ std::string Quoted(const std::string& text) {
   return quoted + "\"";
 }
 
+// "a b c" with `decimals` fixed decimals.
+void AppendTriple(std::string* out, const Eigen::Vector3d& v, int decimals) {
+  for (int c = 0; c < 3; ++c) {
+    if (c) *out += ' ';
+    AppendFixed(out, v[c], decimals);
+  }
+}
+
+// The file header, WorldInfo (origin, crs, up axis, units) and the Transform to the
+// origin, up to the opening of the Shape's Appearance.
+void AppendHeader(std::string* out, const ExportSurface& surface, int decimals) {
+  *out += "#VRML V2.0 utf8\n";
+  *out += "# Facets surface: local coordinates; global = Transform translation + local.\n";
+  *out += "WorldInfo {\n  title \"Facets surface\"\n  info [ ";
+  std::string origin = "origin ";
+  AppendTriple(&origin, surface.origin, decimals);
+  *out += Quoted(origin) + ", " +
+          Quoted("crs " + (surface.crs.empty() ? std::string("unknown") : surface.crs)) +
+          ", \"up Z\", \"units m\" ]\n}\n";
+  *out += "Transform {\n  translation ";
+  AppendTriple(out, surface.origin, decimals);
+  *out += "\n  children [\n    Shape {\n      appearance Appearance {\n";
+}
+
+// Coordinate points (local, m) and the triangles' coordIndex.
+void AppendCoordinates(std::string* out, const ExportSurface& surface, int decimals) {
+  *out += "        coord Coordinate { point [\n";
+  for (const Eigen::Vector3d& v : surface.vertices) {
+    *out += "          ";
+    AppendTriple(out, v, decimals);
+    *out += ",\n";
+  }
+  *out += "        ] }\n        coordIndex [\n";
+  for (const Eigen::Vector3i& t : surface.triangles) {
+    *out += "          ";
+    for (int k = 0; k < 3; ++k) {
+      AppendInt(out, t[k]);
+      *out += ' ';
+    }
+    *out += "-1,\n";
+  }
+  *out += "        ]\n";
+}
+
+void AppendNormals(std::string* out, const std::vector<Eigen::Vector3d>& normals) {
+  *out += "        normalPerVertex TRUE\n        normal Normal { vector [\n";
+  for (const Eigen::Vector3d& n : normals) {
+    *out += "          ";
+    AppendTriple(out, n, 6);
+    *out += ",\n";
+  }
+  *out += "        ] }\n";
+}
+
+// One texture coordinate per triangle corner (corner 3 t + k of triangle t).
+void AppendTextureCoordinates(std::string* out, const TextureAtlas& atlas, size_t num_triangles) {
+  // VRML texture coordinates have t up from the bottom row; the atlas uv has v down.
+  *out += "        texCoord TextureCoordinate { point [\n";
+  for (const Eigen::Vector2f& uv : atlas.uv) {
+    *out += "          ";
+    AppendFixed(out, uv.x(), 7);
+    *out += ' ';
+    AppendFixed(out, 1.0 - static_cast<double>(uv.y()), 7);
+    *out += ",\n";
+  }
+  *out += "        ] }\n        texCoordIndex [\n";
+  for (size_t t = 0; t < num_triangles; ++t) {
+    *out += "          ";
+    for (int k = 0; k < 3; ++k) {
+      AppendInt(out, static_cast<long long>(3 * t + k));
+      *out += ' ';
+    }
+    *out += "-1,\n";
+  }
+  *out += "        ]\n";
+}
+
+// Per-vertex colours as sRGB 0..1 from the linear 0..255 colours; one channel repeated
+// as grey.
+void AppendVertexColors(std::string* out, const ExportSurface& surface) {
+  const int ch = surface.channels;
+  *out += "        colorPerVertex TRUE\n        color Color { color [\n";
+  for (size_t v = 0; v < surface.vertices.size(); ++v) {
+    *out += "          ";
+    for (int c = 0; c < 3; ++c) {
+      if (c) *out += ' ';
+      const float linear = surface.colors[v * ch + (ch == 3 ? c : 0)];
+      AppendFixed(out, LinearToSrgb8(linear) / 255.0, 4);
+    }
+    *out += ",\n";
+  }
+  *out += "        ] }\n";
+}
+
 }  // namespace
 
 void VrmlOptions::Check() const {
@@ -76,25 +170,7 @@ std::string VrmlText(const ExportSurface& surface, const VrmlOptions& options,
 
   std::string out;
   out.reserve(64 * surface.vertices.size() + 32 * surface.triangles.size() + 1024);
-  out += "#VRML V2.0 utf8\n";
-  out += "# Facets surface: local coordinates; global = Transform translation + local.\n";
-  out += "WorldInfo {\n  title \"Facets surface\"\n  info [ ";
-  {
-    std::string origin = "origin ";
-    for (int c = 0; c < 3; ++c) {
-      if (c) origin += ' ';
-      AppendFixed(&origin, surface.origin[c], d);
-    }
-    out += Quoted(origin) + ", " +
-           Quoted("crs " + (surface.crs.empty() ? std::string("unknown") : surface.crs)) +
-           ", \"up Z\", \"units m\" ]\n}\n";
-  }
-  out += "Transform {\n  translation ";
-  for (int c = 0; c < 3; ++c) {
-    if (c) out += ' ';
-    AppendFixed(&out, surface.origin[c], d);
-  }
-  out += "\n  children [\n    Shape {\n      appearance Appearance {\n";
+  AppendHeader(&out, surface, d);
   TextureAtlas atlas;
   if (textured) {
     atlas = BuildTextureAtlas(surface, options.atlas_cell_px, options.max_atlas_px, what);
@@ -103,72 +179,10 @@ std::string VrmlText(const ExportSurface& surface, const VrmlOptions& options,
   }
   out += "      }\n      geometry IndexedFaceSet {\n";
   out += "        solid FALSE\n        ccw TRUE\n        convex TRUE\n";
-  out += "        coord Coordinate { point [\n";
-  for (const Eigen::Vector3d& v : surface.vertices) {
-    out += "          ";
-    for (int c = 0; c < 3; ++c) {
-      if (c) out += ' ';
-      AppendFixed(&out, v[c], d);
-    }
-    out += ",\n";
-  }
-  out += "        ] }\n        coordIndex [\n";
-  for (const Eigen::Vector3i& t : surface.triangles) {
-    out += "          ";
-    for (int k = 0; k < 3; ++k) {
-      AppendInt(&out, t[k]);
-      out += ' ';
-    }
-    out += "-1,\n";
-  }
-  out += "        ]\n";
-  if (!surface.normals.empty()) {
-    out += "        normalPerVertex TRUE\n        normal Normal { vector [\n";
-    for (const Eigen::Vector3d& n : surface.normals) {
-      out += "          ";
-      for (int c = 0; c < 3; ++c) {
-        if (c) out += ' ';
-        AppendFixed(&out, n[c], 6);
-      }
-      out += ",\n";
-    }
-    out += "        ] }\n";
-  }
-  if (textured) {
-    // VRML texture coordinates have t up from the bottom row; the atlas uv has v down.
-    out += "        texCoord TextureCoordinate { point [\n";
-    for (const Eigen::Vector2f& uv : atlas.uv) {
-      out += "          ";
-      AppendFixed(&out, uv.x(), 7);
-      out += ' ';
-      AppendFixed(&out, 1.0 - static_cast<double>(uv.y()), 7);
-      out += ",\n";
-    }
-    out += "        ] }\n        texCoordIndex [\n";
-    for (size_t t = 0; t < surface.triangles.size(); ++t) {
-      out += "          ";
-      for (int k = 0; k < 3; ++k) {
-        AppendInt(&out, static_cast<long long>(3 * t + k));
-        out += ' ';
-      }
-      out += "-1,\n";
-    }
-    out += "        ]\n";
-  }
-  if (vertex_colors) {
-    const int ch = surface.channels;
-    out += "        colorPerVertex TRUE\n        color Color { color [\n";
-    for (size_t v = 0; v < surface.vertices.size(); ++v) {
-      out += "          ";
-      for (int c = 0; c < 3; ++c) {
-        if (c) out += ' ';
-        const float linear = surface.colors[v * ch + (ch == 3 ? c : 0)];
-        AppendFixed(&out, LinearToSrgb8(linear) / 255.0, 4);
-      }
-      out += ",\n";
-    }
-    out += "        ] }\n";
-  }
+  AppendCoordinates(&out, surface, d);
+  if (!surface.normals.empty()) AppendNormals(&out, surface.normals);
+  if (textured) AppendTextureCoordinates(&out, atlas, surface.triangles.size());
+  if (vertex_colors) AppendVertexColors(&out, surface);
   out += "      }\n    }\n  ]\n}\n";
   if (atlas_out != nullptr) *atlas_out = std::move(atlas);
   return out;

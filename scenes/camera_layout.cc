@@ -53,6 +53,72 @@ Camera CropToRoi(const Camera& full, const Rigid3d& cam_from_world, const Region
   return crop;
 }
 
+// Two nadir images side by side along x, the base set by the overlap; a zero frame
+// size becomes the square frame_mm frame.
+std::vector<Pose> StereoPoses(const CameraLayout& c, double f_px, int* width, int* height) {
+  const int frame_px = static_cast<int>(std::lround(c.frame_mm * 1000.0 / c.pixel_um));
+  if (*width == 0) *width = frame_px;
+  if (*height == 0) *height = frame_px;
+  const double z_fly = c.reference_height + c.flying_height;
+  const double base = (1 - c.overlap) * (*width / f_px) * c.flying_height;
+  std::vector<Pose> poses;
+  for (int side : {-1, 1}) {
+    const Eigen::Vector3d centre(c.target.x() + 0.5 * side * base, c.target.y(), z_fly);
+    poses.push_back({centre, Eigen::Vector3d(centre.x(), centre.y(), c.reference_height),
+                     Eigen::Vector3d::UnitY()});
+  }
+  return poses;
+}
+
+// Nadir rows x cols around the target with the forward and side overlaps, then a strip
+// of obliques per direction (north, east, south, west) looking at the target.
+std::vector<Pose> BlockPoses(const CameraLayout& c, double f_px, int width, int height) {
+  const double z_fly = c.reference_height + c.flying_height;
+  const Eigen::Vector3d ground_target(c.target.x(), c.target.y(), c.reference_height);
+  std::vector<Pose> poses;
+  const double gx = width / f_px * c.flying_height, gy = height / f_px * c.flying_height;
+  const double bx = (1 - c.forward_overlap) * gx, by = (1 - c.side_overlap) * gy;
+  for (int r = 0; r < c.rows; ++r) {
+    for (int k = 0; k < c.cols; ++k) {
+      const Eigen::Vector3d centre(c.target.x() + (k - 0.5 * (c.cols - 1)) * bx,
+                                   c.target.y() + (r - 0.5 * (c.rows - 1)) * by, z_fly);
+      poses.push_back({centre, Eigen::Vector3d(centre.x(), centre.y(), c.reference_height),
+                       Eigen::Vector3d::UnitY()});
+    }
+  }
+  const double d = c.flying_height * std::tan(c.oblique_tilt_deg * kDeg);
+  // Looking north (from the south), east, south, west.
+  const Eigen::Vector2d dirs[4] = {{0, 1}, {1, 0}, {0, -1}, {-1, 0}};
+  const double strip_base = c.oblique_base > 0 ? c.oblique_base : bx;
+  for (int i = 0; i < c.obliques; ++i) {
+    // Across the viewing direction (to the camera's right), parallel axes.
+    const Eigen::Vector3d across(dirs[i].y(), -dirs[i].x(), 0);
+    for (int k = 0; k < c.oblique_strip; ++k) {
+      const Eigen::Vector3d shift = (k - 0.5 * (c.oblique_strip - 1)) * strip_base * across;
+      const Eigen::Vector3d centre(c.target.x() - d * dirs[i].x(),
+                                   c.target.y() - d * dirs[i].y(), z_fly);
+      poses.push_back({centre + shift, ground_target + shift, Eigen::Vector3d::UnitZ()});
+    }
+  }
+  return poses;
+}
+
+// Cameras on rings around the target, each looking at it.
+std::vector<Pose> RingPoses(const CameraLayout& c) {
+  std::vector<Pose> poses;
+  for (const RingSpec& ring : c.rings) {
+    for (int i = 0; i < ring.count; ++i) {
+      const double az = (ring.azimuth_offset_deg + 360.0 * i / ring.count) * kDeg;
+      const double el = ring.elevation_deg * kDeg;
+      const Eigen::Vector3d centre =
+          c.target + ring.radius * Eigen::Vector3d(std::cos(el) * std::cos(az),
+                                                   std::cos(el) * std::sin(az), std::sin(el));
+      poses.push_back({centre, c.target, Eigen::Vector3d::UnitZ()});
+    }
+  }
+  return poses;
+}
+
 }  // namespace
 
 Rigid3d LookAt(const Eigen::Vector3d& centre, const Eigen::Vector3d& target,
@@ -76,61 +142,17 @@ ImageBlock BuildImageBlock(const Scene& scene) {
   block.roi = scene.roi;
   block.mean_height = scene.mean_terrain_height;
   const double f_px = c.focal_mm * 1000.0 / c.pixel_um;
-  const double z_fly = c.reference_height + c.flying_height;
-  const Eigen::Vector3d ground_target(c.target.x(), c.target.y(), c.reference_height);
   int width = c.width, height = c.height;
   std::vector<Pose> poses;
   switch (c.type) {
-    case LayoutType::kStereo: {
-      const int frame_px = static_cast<int>(std::lround(c.frame_mm * 1000.0 / c.pixel_um));
-      if (width == 0) width = frame_px;
-      if (height == 0) height = frame_px;
-      const double base = (1 - c.overlap) * (width / f_px) * c.flying_height;
-      for (int side : {-1, 1}) {
-        const Eigen::Vector3d centre(c.target.x() + 0.5 * side * base, c.target.y(), z_fly);
-        poses.push_back({centre, Eigen::Vector3d(centre.x(), centre.y(), c.reference_height),
-                         Eigen::Vector3d::UnitY()});
-      }
+    case LayoutType::kStereo:
+      poses = StereoPoses(c, f_px, &width, &height);
       break;
-    }
-    case LayoutType::kBlock: {
-      const double gx = width / f_px * c.flying_height, gy = height / f_px * c.flying_height;
-      const double bx = (1 - c.forward_overlap) * gx, by = (1 - c.side_overlap) * gy;
-      for (int r = 0; r < c.rows; ++r) {
-        for (int k = 0; k < c.cols; ++k) {
-          const Eigen::Vector3d centre(c.target.x() + (k - 0.5 * (c.cols - 1)) * bx,
-                                       c.target.y() + (r - 0.5 * (c.rows - 1)) * by, z_fly);
-          poses.push_back({centre, Eigen::Vector3d(centre.x(), centre.y(), c.reference_height),
-                           Eigen::Vector3d::UnitY()});
-        }
-      }
-      const double d = c.flying_height * std::tan(c.oblique_tilt_deg * kDeg);
-      // Looking north (from the south), east, south, west.
-      const Eigen::Vector2d dirs[4] = {{0, 1}, {1, 0}, {0, -1}, {-1, 0}};
-      const double strip_base = c.oblique_base > 0 ? c.oblique_base : bx;
-      for (int i = 0; i < c.obliques; ++i) {
-        // Across the viewing direction (to the camera's right), parallel axes.
-        const Eigen::Vector3d across(dirs[i].y(), -dirs[i].x(), 0);
-        for (int k = 0; k < c.oblique_strip; ++k) {
-          const Eigen::Vector3d shift = (k - 0.5 * (c.oblique_strip - 1)) * strip_base * across;
-          const Eigen::Vector3d centre(c.target.x() - d * dirs[i].x(),
-                                       c.target.y() - d * dirs[i].y(), z_fly);
-          poses.push_back({centre + shift, ground_target + shift, Eigen::Vector3d::UnitZ()});
-        }
-      }
+    case LayoutType::kBlock:
+      poses = BlockPoses(c, f_px, width, height);
       break;
-    }
     case LayoutType::kRing:
-      for (const RingSpec& ring : c.rings) {
-        for (int i = 0; i < ring.count; ++i) {
-          const double az = (ring.azimuth_offset_deg + 360.0 * i / ring.count) * kDeg;
-          const double el = ring.elevation_deg * kDeg;
-          const Eigen::Vector3d centre =
-              c.target + ring.radius * Eigen::Vector3d(std::cos(el) * std::cos(az),
-                                                       std::cos(el) * std::sin(az), std::sin(el));
-          poses.push_back({centre, c.target, Eigen::Vector3d::UnitZ()});
-        }
-      }
+      poses = RingPoses(c);
       break;
     case LayoutType::kList:
       for (const ExplicitCamera& e : c.cameras) poses.push_back({e.centre, e.target, e.up});

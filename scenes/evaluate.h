@@ -1,5 +1,5 @@
-// Scoring a reconstructed mesh against a ground-truth scene: the numbers every later
-// issue quotes to prove accuracy (see docs/EVALUATION.md).
+// Scoring a reconstructed mesh against a ground-truth scene: the accuracy and
+// completeness figures by which reconstructions are compared (see docs/EVALUATION.md).
 //
 // Accuracy (reconstruction -> truth): the reconstruction is sampled uniformly by area;
 // each sample's distance to the truth mesh (exact point-triangle distance, CGAL AABB
@@ -129,7 +129,7 @@ struct HeightErrors {
   double spacing = 0;  // m
 };
 
-// The lean of a leaning truth wall as reconstructed (issue 7): a plane fitted to the
+// The lean of a leaning truth wall as reconstructed: a plane fitted to the
 // reconstruction's vertices near the truth wall (within wall_band_gsd of its plane,
 // 1 m in from its side edges, between 15 % and 85 % of the eave height).
 struct WallLean {
@@ -170,7 +170,7 @@ struct EvaluationReport {
   std::vector<WallLean> leaning_walls;  // every truth wall with a nonzero lean
   std::vector<SigmaByViews> sigma_by_views;  // empty when the mesh has no sigma/views
   // Self-intersections of the whole evaluated mesh (CGAL self_intersections, coinciding
-  // vertices merged; mesh/facet_crossings.h): crossing triangle pairs, and triangles the
+  // vertices merged; refine/facet_crossings.h): crossing triangle pairs, and triangles the
   // check had to leave out (degenerate or non-manifold after the merge).
   TriangleCrossings mesh_crossings;
 

@@ -139,24 +139,96 @@ std::vector<uint8_t> AddNoiseAndQuantise(const std::vector<float>& clean, double
   return out;
 }
 
-int SampleTiePoints(const Scene& scene, const TruthMesh& mesh, const Renderer& renderer,
-                    uint32_t seed, ImageBlock* block) {
-  // Faces whose centroid lies in the ROI, drawn with probability proportional to area.
+namespace {
+
+// Faces whose centroid lies in the ROI with the running sum of their areas (m^2), for
+// drawing a face with probability proportional to its area.
+struct AreaTable {
   std::vector<int> faces;
   std::vector<double> cumulative;
   double total = 0;
+};
+
+AreaTable RoiFacesByArea(const Scene& scene, const TruthMesh& mesh) {
+  AreaTable table;
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     const Eigen::Vector3i& F = mesh.faces[f];
     const Eigen::Vector3d centroid =
         (mesh.vertices[F[0]] + mesh.vertices[F[1]] + mesh.vertices[F[2]]) / 3;
     if (!scene.roi.Contains(centroid)) continue;
-    total += 0.5 * (mesh.vertices[F[1]] - mesh.vertices[F[0]])
-                       .cross(mesh.vertices[F[2]] - mesh.vertices[F[0]])
-                       .norm();
-    faces.push_back(static_cast<int>(f));
-    cumulative.push_back(total);
+    table.total += 0.5 * (mesh.vertices[F[1]] - mesh.vertices[F[0]])
+                             .cross(mesh.vertices[F[2]] - mesh.vertices[F[0]])
+                             .norm();
+    table.faces.push_back(static_cast<int>(f));
+    table.cumulative.push_back(table.total);
   }
-  if (faces.empty() || scene.tie_points == 0) return 0;
+  return table;
+}
+
+// The images (index, pixel) that see p: inside the frame by a pixel, the first hit of
+// the ray is p itself, and the ray is not grazing.
+std::vector<std::pair<size_t, Eigen::Vector2d>> ImagesSeeing(const Eigen::Vector3d& p,
+                                                             const ImageBlock& block,
+                                                             const Renderer& renderer) {
+  std::vector<std::pair<size_t, Eigen::Vector2d>> seen;
+  for (size_t k = 0; k < block.images.size(); ++k) {
+    const BlockImage& image = block.images[k];
+    const Camera& camera = block.CameraOf(image);
+    const Eigen::Vector3d pc = image.cam_from_world * p;
+    if (pc.z() <= 0) continue;
+    const Eigen::Vector2d px = camera.ImageFromCam(pc);
+    if (px.x() < 1 || px.y() < 1 || px.x() > camera.width - 1 || px.y() > camera.height - 1) {
+      continue;
+    }
+    const Eigen::Vector3d c = image.ProjectionCentre();
+    const double range = (p - c).norm();
+    const SurfaceHit hit = renderer.Cast(c, p - c);
+    // Visible: the first hit is the point itself (float ray, double point).
+    if (!hit.hit || std::abs(hit.distance - range) > 0.01 + 1e-5 * range) continue;
+    // Not at grazing incidence, where a matcher would not find it either.
+    if (std::abs(hit.normal.dot((p - c) / range)) < 0.2) continue;
+    seen.emplace_back(k, px);
+  }
+  return seen;
+}
+
+// A tie point at truth point p seen by `seen`: its start xyz perturbed by tie_point_sigma
+// (m; the 3D offset truncated at 2 sigma), its grey from the first image, its track and
+// keypoints added to the images, its error the mean reprojection distance (px).
+TiePoint MakeTiePoint(const Eigen::Vector3d& p,
+                      const std::vector<std::pair<size_t, Eigen::Vector2d>>& seen, long long id,
+                      double sigma, const Renderer& renderer, std::normal_distribution<double>& gauss,
+                      std::mt19937& rng, ImageBlock* block) {
+  TiePoint tie;
+  tie.point3d_id = id;
+  Eigen::Vector3d e;
+  do {
+    e = Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
+  } while (e.norm() > 2);
+  tie.xyz = p + sigma * e;
+  SurfaceHit on_surface = renderer.Cast(block->images[seen[0].first].ProjectionCentre(),
+                                        p - block->images[seen[0].first].ProjectionCentre());
+  const int grey = static_cast<int>(std::lround(std::clamp(renderer.Radiance(on_surface), 0.0, 255.0)));
+  tie.rgb = Eigen::Vector3i(grey, grey, grey);
+  double error = 0;
+  for (const auto& [k, px] : seen) {
+    BlockImage& image = block->images[k];
+    const Eigen::Vector2d reprojected =
+        block->CameraOf(image).ImageFromCam(image.cam_from_world * tie.xyz);
+    error += (reprojected - px).norm();
+    tie.track.push_back({image.image_id, static_cast<int>(image.keypoints.size())});
+    image.keypoints.push_back({px, tie.point3d_id});
+  }
+  tie.error = error / seen.size();
+  return tie;
+}
+
+}  // namespace
+
+int SampleTiePoints(const Scene& scene, const TruthMesh& mesh, const Renderer& renderer,
+                    uint32_t seed, ImageBlock* block) {
+  const AreaTable table = RoiFacesByArea(scene, mesh);
+  if (table.faces.empty() || scene.tie_points == 0) return 0;
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   std::normal_distribution<double> gauss(0.0, 1.0);
@@ -165,58 +237,21 @@ int SampleTiePoints(const Scene& scene, const TruthMesh& mesh, const Renderer& r
   for (int attempt = 0; attempt < max_attempts &&
                         static_cast<int>(block->points.size()) < scene.tie_points;
        ++attempt) {
-    const double r = unit(rng) * total;
-    const int f = faces[std::lower_bound(cumulative.begin(), cumulative.end(), r) -
-                        cumulative.begin()];
+    const double r = unit(rng) * table.total;
+    const int f = table.faces[std::lower_bound(table.cumulative.begin(), table.cumulative.end(),
+                                               r) -
+                              table.cumulative.begin()];
     double a = unit(rng), b = unit(rng);
     if (a + b > 1) {
       a = 1 - a;
       b = 1 - b;
     }
     const Eigen::Vector3d p = mesh.Point(f, a, b);
-    std::vector<std::pair<size_t, Eigen::Vector2d>> seen;
-    for (size_t k = 0; k < block->images.size(); ++k) {
-      const BlockImage& image = block->images[k];
-      const Camera& camera = block->CameraOf(image);
-      const Eigen::Vector3d pc = image.cam_from_world * p;
-      if (pc.z() <= 0) continue;
-      const Eigen::Vector2d px = camera.ImageFromCam(pc);
-      if (px.x() < 1 || px.y() < 1 || px.x() > camera.width - 1 || px.y() > camera.height - 1) {
-        continue;
-      }
-      const Eigen::Vector3d c = image.ProjectionCentre();
-      const double range = (p - c).norm();
-      const SurfaceHit hit = renderer.Cast(c, p - c);
-      // Visible: the first hit is the point itself (float ray, double point).
-      if (!hit.hit || std::abs(hit.distance - range) > 0.01 + 1e-5 * range) continue;
-      // Not at grazing incidence, where a matcher would not find it either.
-      if (std::abs(hit.normal.dot((p - c) / range)) < 0.2) continue;
-      seen.emplace_back(k, px);
-    }
+    const auto seen = ImagesSeeing(p, *block, renderer);
     if (seen.size() < 2) continue;
-    TiePoint tie;
-    tie.point3d_id = next_id++;
-    // Start values, not truth: perturbed, the 3D offset truncated at 2 sigma.
-    Eigen::Vector3d e;
-    do {
-      e = Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
-    } while (e.norm() > 2);
-    tie.xyz = p + scene.tie_point_sigma * e;
-    SurfaceHit on_surface = renderer.Cast(block->images[seen[0].first].ProjectionCentre(),
-                                          p - block->images[seen[0].first].ProjectionCentre());
-    const int grey = static_cast<int>(std::lround(std::clamp(renderer.Radiance(on_surface), 0.0, 255.0)));
-    tie.rgb = Eigen::Vector3i(grey, grey, grey);
-    double error = 0;
-    for (const auto& [k, px] : seen) {
-      BlockImage& image = block->images[k];
-      const Eigen::Vector2d reprojected =
-          block->CameraOf(image).ImageFromCam(image.cam_from_world * tie.xyz);
-      error += (reprojected - px).norm();
-      tie.track.push_back({image.image_id, static_cast<int>(image.keypoints.size())});
-      image.keypoints.push_back({px, tie.point3d_id});
-    }
-    tie.error = error / seen.size();
-    block->points.push_back(tie);
+    // Start values, not truth: the tie point is perturbed.
+    block->points.push_back(MakeTiePoint(p, seen, next_id++, scene.tie_point_sigma, renderer,
+                                         gauss, rng, block));
   }
   return static_cast<int>(block->points.size());
 }

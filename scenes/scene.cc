@@ -116,46 +116,38 @@ void Require(bool ok, const Field& f, const std::string& key, const std::string&
   if (!ok) f.Fail(key, what);
 }
 
-Shape ParseShape(const Field& f, const std::string& base_dir) {
-  Shape s;
+// "type" of a shape, with the region label that type has by default.
+void ParseShapeType(const Field& f, Shape* s) {
   const std::string type = f.String("type");
   if (type == "terrain") {
-    s.type = ShapeType::kTerrain;
+    s->type = ShapeType::kTerrain;
   } else if (type == "plane") {
-    s.type = ShapeType::kPlane;
+    s->type = ShapeType::kPlane;
   } else if (type == "gable_roof") {
-    s.type = ShapeType::kGableRoof;
-    s.label = kLabelRoof;
+    s->type = ShapeType::kGableRoof;
+    s->label = kLabelRoof;
   } else if (type == "parabolic_cylinder") {
-    s.type = ShapeType::kParabolicCylinder;
-    s.label = kLabelRoof;
+    s->type = ShapeType::kParabolicCylinder;
+    s->label = kLabelRoof;
   } else if (type == "building") {
-    s.type = ShapeType::kBuilding;
-    s.label = kLabelRoof;
+    s->type = ShapeType::kBuilding;
+    s->label = kLabelRoof;
   } else if (type == "blob") {
-    s.type = ShapeType::kBlob;
-    s.label = kLabelObject;
+    s->type = ShapeType::kBlob;
+    s->label = kLabelObject;
   } else if (type == "mesh") {
-    s.type = ShapeType::kMesh;
-    s.label = kLabelObject;
+    s->type = ShapeType::kMesh;
+    s->label = kLabelObject;
   } else {
     f.Fail("type", "unknown shape type '" + type +
                        "' (terrain, plane, gable_roof, parabolic_cylinder, building, blob, "
                        "mesh)");
   }
-  s.label = f.Int("label", s.label);
-  Require(s.label >= 0 && s.label <= 3, f, "label", "must be 0..3");
-  s.centre = f.Vec<3>("centre", Eigen::Vector3d::Zero());
-  s.azimuth_deg = f.Number("azimuth_deg", 0.0);
-  s.length = f.Number("length", s.length);
-  s.width = f.Number("width", s.width);
-  Require(s.length > 0, f, "length", "must be > 0");
-  Require(s.width > 0, f, "width", "must be > 0");
-  s.slope_deg = f.Number("slope_deg", s.slope_deg);
-  Require(s.slope_deg >= 0 && s.slope_deg < 80, f, "slope_deg", "must be in [0, 80)");
-  s.height = f.Number("height", s.height);
-  s.step = f.Number("step", 0.0);
-  Require(s.step >= 0, f, "step", "must be >= 0");
+}
+
+// "waves": [[amplitude, wavelength, direction_deg, phase_deg], ...] (m, m, deg, deg).
+std::vector<Eigen::Vector4d> ParseWaves(const Field& f) {
+  std::vector<Eigen::Vector4d> waves;
   for (const Field& w : f.Array("waves")) {
     const auto& v = w.json();
     if (!v.is_array() || v.size() != 4) {
@@ -174,18 +166,37 @@ Shape ParseShape(const Field& f, const std::string& base_dir) {
     if (wave[1] <= 0) {
       throw std::invalid_argument(f.source() + ": " + w.path() + "/1: wavelength must be > 0");
     }
-    s.waves.push_back(wave);
+    waves.push_back(wave);
   }
+  return waves;
+}
+
+RoofType ParseRoofType(const Field& f) {
   const std::string roof = f.String("roof", "flat");
-  if (roof == "flat") {
-    s.roof = RoofType::kFlat;
-  } else if (roof == "gable") {
-    s.roof = RoofType::kGable;
-  } else if (roof == "hip") {
-    s.roof = RoofType::kHip;
-  } else {
-    f.Fail("roof", "unknown roof type '" + roof + "' (flat, gable, hip)");
-  }
+  if (roof == "flat") return RoofType::kFlat;
+  if (roof == "gable") return RoofType::kGable;
+  if (roof == "hip") return RoofType::kHip;
+  f.Fail("roof", "unknown roof type '" + roof + "' (flat, gable, hip)");
+}
+
+Shape ParseShape(const Field& f, const std::string& base_dir) {
+  Shape s;
+  ParseShapeType(f, &s);
+  s.label = f.Int("label", s.label);
+  Require(s.label >= 0 && s.label <= 3, f, "label", "must be 0..3");
+  s.centre = f.Vec<3>("centre", Eigen::Vector3d::Zero());
+  s.azimuth_deg = f.Number("azimuth_deg", 0.0);
+  s.length = f.Number("length", s.length);
+  s.width = f.Number("width", s.width);
+  Require(s.length > 0, f, "length", "must be > 0");
+  Require(s.width > 0, f, "width", "must be > 0");
+  s.slope_deg = f.Number("slope_deg", s.slope_deg);
+  Require(s.slope_deg >= 0 && s.slope_deg < 80, f, "slope_deg", "must be in [0, 80)");
+  s.height = f.Number("height", s.height);
+  s.step = f.Number("step", 0.0);
+  Require(s.step >= 0, f, "step", "must be >= 0");
+  s.waves = ParseWaves(f);
+  s.roof = ParseRoofType(f);
   s.wall_lean_deg = f.Vec<4>("wall_lean_deg", Eigen::Vector4d::Zero());
   for (int i = 0; i < 4; ++i) {
     Require(std::abs(s.wall_lean_deg[i]) < 45, f, "wall_lean_deg/" + std::to_string(i),
@@ -209,54 +220,55 @@ Shape ParseShape(const Field& f, const std::string& base_dir) {
   return s;
 }
 
-CameraLayout ParseLayout(const Field& f) {
-  CameraLayout c;
+LayoutType ParseLayoutType(const Field& f) {
   const std::string type = f.String("type");
-  if (type == "stereo") {
-    c.type = LayoutType::kStereo;
-  } else if (type == "block") {
-    c.type = LayoutType::kBlock;
-  } else if (type == "ring") {
-    c.type = LayoutType::kRing;
-  } else if (type == "list") {
-    c.type = LayoutType::kList;
-  } else {
-    f.Fail("type", "unknown camera layout '" + type + "' (stereo, block, ring, list)");
-  }
-  c.focal_mm = f.Number("focal_mm", c.focal_mm);
-  c.pixel_um = f.Number("pixel_um", c.pixel_um);
-  Require(c.focal_mm > 0, f, "focal_mm", "must be > 0");
-  Require(c.pixel_um > 0, f, "pixel_um", "must be > 0");
-  c.width = f.Int("width", 0);
-  c.height = f.Int("height", 0);
-  Require(c.width >= 0, f, "width", "must be >= 0");
-  Require(c.height >= 0, f, "height", "must be >= 0");
-  c.frame_mm = f.Number("frame_mm", c.frame_mm);
-  Require(c.frame_mm > 0, f, "frame_mm", "must be > 0");
-  c.flying_height = f.Number("flying_height", c.flying_height);
-  Require(c.flying_height > 0, f, "flying_height", "must be > 0");
-  c.reference_height = f.Number("reference_height", 0.0);
-  c.overlap = f.Number("overlap", c.overlap);
-  Require(c.overlap >= 0 && c.overlap < 1, f, "overlap", "must be in [0, 1)");
-  c.forward_overlap = f.Number("forward_overlap", c.forward_overlap);
-  c.side_overlap = f.Number("side_overlap", c.side_overlap);
-  Require(c.forward_overlap >= 0 && c.forward_overlap < 1, f, "forward_overlap",
+  if (type == "stereo") return LayoutType::kStereo;
+  if (type == "block") return LayoutType::kBlock;
+  if (type == "ring") return LayoutType::kRing;
+  if (type == "list") return LayoutType::kList;
+  f.Fail("type", "unknown camera layout '" + type + "' (stereo, block, ring, list)");
+}
+
+// The camera (focal length, pixel size, frame) and the flight: heights (m), overlaps,
+// rows and columns of the block, obliques.
+void ParseCameraAndFlight(const Field& f, CameraLayout* c) {
+  c->focal_mm = f.Number("focal_mm", c->focal_mm);
+  c->pixel_um = f.Number("pixel_um", c->pixel_um);
+  Require(c->focal_mm > 0, f, "focal_mm", "must be > 0");
+  Require(c->pixel_um > 0, f, "pixel_um", "must be > 0");
+  c->width = f.Int("width", 0);
+  c->height = f.Int("height", 0);
+  Require(c->width >= 0, f, "width", "must be >= 0");
+  Require(c->height >= 0, f, "height", "must be >= 0");
+  c->frame_mm = f.Number("frame_mm", c->frame_mm);
+  Require(c->frame_mm > 0, f, "frame_mm", "must be > 0");
+  c->flying_height = f.Number("flying_height", c->flying_height);
+  Require(c->flying_height > 0, f, "flying_height", "must be > 0");
+  c->reference_height = f.Number("reference_height", 0.0);
+  c->overlap = f.Number("overlap", c->overlap);
+  Require(c->overlap >= 0 && c->overlap < 1, f, "overlap", "must be in [0, 1)");
+  c->forward_overlap = f.Number("forward_overlap", c->forward_overlap);
+  c->side_overlap = f.Number("side_overlap", c->side_overlap);
+  Require(c->forward_overlap >= 0 && c->forward_overlap < 1, f, "forward_overlap",
           "must be in [0, 1)");
-  Require(c.side_overlap >= 0 && c.side_overlap < 1, f, "side_overlap", "must be in [0, 1)");
-  c.rows = f.Int("rows", c.rows);
-  c.cols = f.Int("cols", c.cols);
-  Require(c.rows >= 1, f, "rows", "must be >= 1");
-  Require(c.cols >= 1, f, "cols", "must be >= 1");
-  c.obliques = f.Int("obliques", c.obliques);
-  Require(c.obliques >= 0 && c.obliques <= 4, f, "obliques", "must be 0..4");
-  c.oblique_tilt_deg = f.Number("oblique_tilt_deg", c.oblique_tilt_deg);
-  Require(c.oblique_tilt_deg > 0 && c.oblique_tilt_deg < 80, f, "oblique_tilt_deg",
+  Require(c->side_overlap >= 0 && c->side_overlap < 1, f, "side_overlap", "must be in [0, 1)");
+  c->rows = f.Int("rows", c->rows);
+  c->cols = f.Int("cols", c->cols);
+  Require(c->rows >= 1, f, "rows", "must be >= 1");
+  Require(c->cols >= 1, f, "cols", "must be >= 1");
+  c->obliques = f.Int("obliques", c->obliques);
+  Require(c->obliques >= 0 && c->obliques <= 4, f, "obliques", "must be 0..4");
+  c->oblique_tilt_deg = f.Number("oblique_tilt_deg", c->oblique_tilt_deg);
+  Require(c->oblique_tilt_deg > 0 && c->oblique_tilt_deg < 80, f, "oblique_tilt_deg",
           "must be in (0, 80)");
-  c.oblique_strip = f.Int("oblique_strip", c.oblique_strip);
-  Require(c.oblique_strip >= 1 && c.oblique_strip <= 9, f, "oblique_strip", "must be 1..9");
-  c.oblique_base = f.Number("oblique_base", c.oblique_base);
-  Require(c.oblique_base >= 0, f, "oblique_base", "must be >= 0");
-  c.target = f.Vec<3>("target", Eigen::Vector3d::Zero());
+  c->oblique_strip = f.Int("oblique_strip", c->oblique_strip);
+  Require(c->oblique_strip >= 1 && c->oblique_strip <= 9, f, "oblique_strip", "must be 1..9");
+  c->oblique_base = f.Number("oblique_base", c->oblique_base);
+  Require(c->oblique_base >= 0, f, "oblique_base", "must be >= 0");
+}
+
+// "rings" (ring layout) and "cameras" (list layout).
+void ParseRingsAndCameras(const Field& f, CameraLayout* c) {
   for (const Field& r : f.Array("rings")) {
     RingSpec ring;
     ring.radius = r.Number("radius");
@@ -266,7 +278,7 @@ CameraLayout ParseLayout(const Field& f) {
     Require(ring.radius > 0, r, "radius", "must be > 0");
     Require(ring.count >= 1, r, "count", "must be >= 1");
     Require(std::abs(ring.elevation_deg) < 89, r, "elevation_deg", "must be within +-89");
-    c.rings.push_back(ring);
+    c->rings.push_back(ring);
   }
   for (const Field& e : f.Array("cameras")) {
     ExplicitCamera cam;
@@ -274,8 +286,16 @@ CameraLayout ParseLayout(const Field& f) {
     cam.target = e.Vec<3>("target");
     cam.up = e.Vec<3>("up", Eigen::Vector3d::UnitY());
     Require((cam.target - cam.centre).norm() > 0, e, "target", "equals the centre");
-    c.cameras.push_back(cam);
+    c->cameras.push_back(cam);
   }
+}
+
+CameraLayout ParseLayout(const Field& f) {
+  CameraLayout c;
+  c.type = ParseLayoutType(f);
+  ParseCameraAndFlight(f, &c);
+  c.target = f.Vec<3>("target", Eigen::Vector3d::Zero());
+  ParseRingsAndCameras(f, &c);
   c.crop_to_roi = f.Bool("crop_to_roi", c.type == LayoutType::kStereo);
   c.crop_margin_px = f.Int("crop_margin_px", c.crop_margin_px);
   Require(c.crop_margin_px >= 0, f, "crop_margin_px", "must be >= 0");
@@ -290,6 +310,84 @@ CameraLayout ParseLayout(const Field& f) {
     Require(c.height > 0, f, "height", "must be > 0 for this layout");
   }
   return c;
+}
+
+AlbedoBand ParseAlbedoBand(const Field& b) {
+  AlbedoBand band;
+  band.wavelength_min = b.Number("wavelength_min");
+  band.wavelength_max = b.Number("wavelength_max");
+  band.contrast = b.Number("contrast", band.contrast);
+  band.components = b.Int("components", band.components);
+  Require(band.wavelength_min > 0, b, "wavelength_min", "must be > 0");
+  Require(band.wavelength_max >= band.wavelength_min, b, "wavelength_max",
+          "must be >= wavelength_min");
+  Require(band.contrast >= 0, b, "contrast", "must be >= 0");
+  Require(band.components >= 1 && band.components <= 1000, b, "components", "must be 1..1000");
+  return band;
+}
+
+AlbedoPatch ParseAlbedoPatch(const Field& p) {
+  AlbedoPatch patch;
+  patch.box = p.String("kind", "rectangle") == "box";
+  if (!patch.box && p.String("kind", "rectangle") != "rectangle") {
+    p.Fail("kind", "expected 'rectangle' or 'box'");
+  }
+  patch.centre = p.Vec<3>("centre");
+  if (patch.box) {
+    patch.size = p.Vec<3>("size");
+  } else {
+    const Eigen::Vector2d size = p.Vec<2>("size");
+    patch.size = Eigen::Vector3d(size.x(), size.y(), 0);
+  }
+  Require((patch.size.head<2>().array() > 0).all(), p, "size", "must be > 0");
+  patch.azimuth_deg = p.Number("azimuth_deg", 0.0);
+  patch.albedo = p.Number("albedo", 0.5);
+  Require(patch.albedo >= 0 && patch.albedo <= 1, p, "albedo", "must be in [0, 1]");
+  return patch;
+}
+
+// "albedo": the procedural texture (wavelengths in m; 0 = chosen from the GSD later).
+void ParseAlbedo(const Field& a, AlbedoOptions* o) {
+  o->seed = a.Int("seed", o->seed);
+  o->components = a.Int("components", o->components);
+  Require(o->components >= 1 && o->components <= 1000, a, "components", "must be 1..1000");
+  o->wavelength_min = a.Number("wavelength_min", 0.0);
+  o->wavelength_max = a.Number("wavelength_max", 0.0);
+  Require(o->wavelength_min >= 0, a, "wavelength_min", "must be >= 0");
+  Require(o->wavelength_max >= o->wavelength_min, a, "wavelength_max",
+          "must be >= wavelength_min");
+  o->mean = a.Number("mean", o->mean);
+  o->contrast = a.Number("contrast", o->contrast);
+  Require(o->mean >= 0 && o->mean <= 1, a, "mean", "must be in [0, 1]");
+  Require(o->contrast >= 0, a, "contrast", "must be >= 0");
+  for (const Field& b : a.Array("extra_bands")) o->extra_bands.push_back(ParseAlbedoBand(b));
+  for (const Field& p : a.Array("patches")) o->patches.push_back(ParseAlbedoPatch(p));
+}
+
+// "sun": azimuth and elevation (deg) and the ambient share of the light (0..1).
+void ParseSun(const Field& s, SunOptions* sun) {
+  sun->azimuth_deg = s.Number("azimuth_deg", sun->azimuth_deg);
+  sun->elevation_deg = s.Number("elevation_deg", sun->elevation_deg);
+  sun->ambient = s.Number("ambient", sun->ambient);
+  Require(sun->ambient >= 0 && sun->ambient <= 1, s, "ambient", "must be in [0, 1]");
+  Require(sun->elevation_deg > 0 && sun->elevation_deg <= 90, s, "elevation_deg",
+          "must be in (0, 90]");
+}
+
+// Image noise, supersampling, seed, mesh tolerance and tie points of the rendering.
+void ParseRendering(const Field& f, Scene* scene) {
+  scene->noise_sigma = f.Number("noise_sigma", scene->noise_sigma);
+  Require(scene->noise_sigma >= 0, f, "noise_sigma", "must be >= 0");
+  scene->supersampling = f.Int("supersampling", scene->supersampling);
+  Require(scene->supersampling >= 1 && scene->supersampling <= 16, f, "supersampling",
+          "must be 1..16");
+  scene->seed = f.Int("seed", scene->seed);
+  scene->sagitta_tolerance = f.Number("sagitta_tolerance", scene->sagitta_tolerance);
+  Require(scene->sagitta_tolerance > 0, f, "sagitta_tolerance", "must be > 0");
+  scene->tie_points = f.Int("tie_points", scene->tie_points);
+  Require(scene->tie_points >= 0, f, "tie_points", "must be >= 0");
+  scene->tie_point_sigma = f.Number("tie_point_sigma", 0.0);
+  if (scene->tie_point_sigma == 0) scene->tie_point_sigma = 0.25 * scene->ground_pixel_size;
 }
 
 }  // namespace
@@ -357,81 +455,14 @@ Scene ParseScene(const nlohmann::json& json, const std::string& source_name) {
   Require(!shapes.empty(), f, "surface", "needs at least one shape");
   for (const Field& s : shapes) scene.surface.push_back(ParseShape(s, base_dir));
 
-  if (f.Has("albedo")) {
-    const Field a = f.Child("albedo");
-    AlbedoOptions& o = scene.albedo;
-    o.seed = a.Int("seed", o.seed);
-    o.components = a.Int("components", o.components);
-    Require(o.components >= 1 && o.components <= 1000, a, "components", "must be 1..1000");
-    o.wavelength_min = a.Number("wavelength_min", 0.0);
-    o.wavelength_max = a.Number("wavelength_max", 0.0);
-    Require(o.wavelength_min >= 0, a, "wavelength_min", "must be >= 0");
-    Require(o.wavelength_max >= o.wavelength_min, a, "wavelength_max",
-            "must be >= wavelength_min");
-    o.mean = a.Number("mean", o.mean);
-    o.contrast = a.Number("contrast", o.contrast);
-    Require(o.mean >= 0 && o.mean <= 1, a, "mean", "must be in [0, 1]");
-    Require(o.contrast >= 0, a, "contrast", "must be >= 0");
-    for (const Field& b : a.Array("extra_bands")) {
-      AlbedoBand band;
-      band.wavelength_min = b.Number("wavelength_min");
-      band.wavelength_max = b.Number("wavelength_max");
-      band.contrast = b.Number("contrast", band.contrast);
-      band.components = b.Int("components", band.components);
-      Require(band.wavelength_min > 0, b, "wavelength_min", "must be > 0");
-      Require(band.wavelength_max >= band.wavelength_min, b, "wavelength_max",
-              "must be >= wavelength_min");
-      Require(band.contrast >= 0, b, "contrast", "must be >= 0");
-      Require(band.components >= 1 && band.components <= 1000, b, "components", "must be 1..1000");
-      o.extra_bands.push_back(band);
-    }
-    for (const Field& p : a.Array("patches")) {
-      AlbedoPatch patch;
-      patch.box = p.String("kind", "rectangle") == "box";
-      if (!patch.box && p.String("kind", "rectangle") != "rectangle") {
-        p.Fail("kind", "expected 'rectangle' or 'box'");
-      }
-      patch.centre = p.Vec<3>("centre");
-      if (patch.box) {
-        patch.size = p.Vec<3>("size");
-      } else {
-        const Eigen::Vector2d size = p.Vec<2>("size");
-        patch.size = Eigen::Vector3d(size.x(), size.y(), 0);
-      }
-      Require((patch.size.head<2>().array() > 0).all(), p, "size", "must be > 0");
-      patch.azimuth_deg = p.Number("azimuth_deg", 0.0);
-      patch.albedo = p.Number("albedo", 0.5);
-      Require(patch.albedo >= 0 && patch.albedo <= 1, p, "albedo", "must be in [0, 1]");
-      o.patches.push_back(patch);
-    }
-  }
+  if (f.Has("albedo")) ParseAlbedo(f.Child("albedo"), &scene.albedo);
   if (scene.albedo.wavelength_max == 0) {
     scene.albedo.wavelength_min = 2 * scene.ground_pixel_size;
     scene.albedo.wavelength_max = 20 * scene.ground_pixel_size;
   }
-  if (f.Has("sun")) {
-    const Field s = f.Child("sun");
-    scene.sun.azimuth_deg = s.Number("azimuth_deg", scene.sun.azimuth_deg);
-    scene.sun.elevation_deg = s.Number("elevation_deg", scene.sun.elevation_deg);
-    scene.sun.ambient = s.Number("ambient", scene.sun.ambient);
-    Require(scene.sun.ambient >= 0 && scene.sun.ambient <= 1, s, "ambient",
-            "must be in [0, 1]");
-    Require(scene.sun.elevation_deg > 0 && scene.sun.elevation_deg <= 90, s, "elevation_deg",
-            "must be in (0, 90]");
-  }
+  if (f.Has("sun")) ParseSun(f.Child("sun"), &scene.sun);
   scene.layout = ParseLayout(f.Child("cameras"));
-  scene.noise_sigma = f.Number("noise_sigma", scene.noise_sigma);
-  Require(scene.noise_sigma >= 0, f, "noise_sigma", "must be >= 0");
-  scene.supersampling = f.Int("supersampling", scene.supersampling);
-  Require(scene.supersampling >= 1 && scene.supersampling <= 16, f, "supersampling",
-          "must be 1..16");
-  scene.seed = f.Int("seed", scene.seed);
-  scene.sagitta_tolerance = f.Number("sagitta_tolerance", scene.sagitta_tolerance);
-  Require(scene.sagitta_tolerance > 0, f, "sagitta_tolerance", "must be > 0");
-  scene.tie_points = f.Int("tie_points", scene.tie_points);
-  Require(scene.tie_points >= 0, f, "tie_points", "must be >= 0");
-  scene.tie_point_sigma = f.Number("tie_point_sigma", 0.0);
-  if (scene.tie_point_sigma == 0) scene.tie_point_sigma = 0.25 * scene.ground_pixel_size;
+  ParseRendering(f, &scene);
   scene.source_path = source_name;
   scene.Check();
   return scene;

@@ -19,6 +19,7 @@ PACKAGES=(
   libcli11-dev                             # command line of the facets binary
   view3dscene                              # tovrmlx3d: reads the .wrl products (validate-products.sh)
   libgdal-dev                              # GeoTIFF orthophoto and DSM (io/raster_io)
+  universal-ctags                          # function extents for scripts/check_lengths.sh
 )
 
 export DEBIAN_FRONTEND=noninteractive

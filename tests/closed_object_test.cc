@@ -90,6 +90,7 @@ TEST(ClosedObject, SmallObjectFromTheAutomaticClosedStart) {
   ImageBlock block = rendered.block;
 
   ReconstructionOptions options;
+  options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = 2;
   options.start_closed = true;
   // The break-off is in metres (default 0.01 m for aerial blocks): here 0.1 ground pixel.
@@ -128,6 +129,7 @@ TEST(ClosedObject, GivenStartMeshLiftedBeforeABlackBackground) {
   WritePly(start_file, start_data);
 
   ReconstructionOptions options;
+  options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = 2;
   options.closed.mesh_file = start_file;
   options.closed.lifting_steps = 7;
@@ -172,6 +174,7 @@ TEST(ClosedObject, VisualHullStartBeforeABlackBackground) {
   const std::string& dir = rendered.dir;
   const ImageBlock& block = rendered.block;
   ReconstructionOptions options;
+  options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = 2;
   options.start_closed = true;
   options.closed.shape = "visual-hull";
@@ -229,6 +232,7 @@ TEST(ClosedObject, SilhouetteTermHoldsTheOutlineWithoutTheHullClamp) {
   const std::string& dir = rendered.dir;
   const ImageBlock& block = rendered.block;
   ReconstructionOptions options;
+  options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = 2;
   options.start_closed = true;
   options.closed.shape = "visual-hull";

@@ -129,6 +129,7 @@ TEST_F(NormalSearchGable, RoofsAreNotSearchedByDefault) {
 // coarsest is searched and reported, and the roof still comes out right.
 TEST_F(NormalSearchGable, ReconstructSearchesEveryFinerLevel) {
   ReconstructionOptions options;
+  options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = 3;
   options.start = StartSurfaceKind::kPlane;  // at the tie points' median height, as the seed table
   options.normal_search = true;
@@ -270,6 +271,7 @@ TEST_F(NormalSearchGable, PlanePropagationOnTheTruthMovesLittle) {
 // comes out right.
 TEST_F(NormalSearchGable, ReconstructPropagatesPlanesOnEveryFinerLevel) {
   ReconstructionOptions options;
+  options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = 3;
   options.start = StartSurfaceKind::kPlane;
   options.plane_propagation = true;
@@ -295,6 +297,7 @@ TEST_F(NormalSearchGable, ReconstructPropagatesPlanesOnEveryFinerLevel) {
 // the five passes, the projection moved the level-1 vertices, and the roof stays right.
 TEST_F(NormalSearchGable, VCycleGoesBackUpToLevelOneAndDownAgain) {
   ReconstructionOptions options;
+  options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = 3;
   options.start = StartSurfaceKind::kPlane;
   options.v_cycles = 1;

@@ -40,6 +40,7 @@ TEST(ProductsReconstruction, SeedGableOrthophotoAndDsmMatchTruth) {
   block.crs = "EPSG:25832";
 
   ReconstructionOptions options;
+  options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = 3;
   // The plane start this test was written for: from the tie-point start the finest
   // level's first window oscillates (30 iterations, not converged) although its

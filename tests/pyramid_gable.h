@@ -1,5 +1,5 @@
 // Test helper for the issue 6 pyramid and lifting acceptance: the pyramid scene
-// (scenes/data/pyramid_gable.json) rendered once per test folder, its block with the
+// (scenes/data/pyramid_gable.json) rendered once per process (tests/rendered_scene.h), its block with the
 // scene's window as ROI, the true mean height and the rms of true height errors.
 #pragma once
 
@@ -11,6 +11,7 @@
 #include "scenes/renderer.h"
 #include "scenes/scene.h"
 #include "scenes/truth_mesh.h"
+#include "tests/rendered_scene.h"
 #include "tests/truth_start.h"
 
 namespace facets {
@@ -22,9 +23,9 @@ struct PyramidGable {
   double true_mean_height = 0.0;  // of the highest surface over the ROI
 
   explicit PyramidGable(const std::string& folder) {
-    scene = LoadScene(std::string(FACETS_SOURCE_DIR) + "/scenes/data/pyramid_gable.json");
-    dir = folder;
-    RenderScene(scene, dir);
+    const std::string file = std::string(FACETS_SOURCE_DIR) + "/scenes/data/pyramid_gable.json";
+    scene = LoadScene(file);
+    dir = RenderSceneOnce(file, scene, folder);  // the first folder of this process
     block = ReadColmapModel(dir + "/sparse", dir + "/images");
     block.roi = scene.roi;
     const TruthMesh truth = BuildTruthMesh(scene);
@@ -55,6 +56,7 @@ struct PyramidGable {
 // regularisation, plane start at the given height.
 inline ReconstructionOptions PyramidGableOptions(int levels, double start_height) {
   ReconstructionOptions options;
+  options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = levels;
   options.adjustment.regularisation = RegularisationFromName("adaptive");
   options.start_height = start_height;

@@ -29,6 +29,7 @@ void ReconstructSeedGable(double break_off_gsd, const std::string& name) {
   ImageBlock block = rendered.block;  // the 24 m x 24 m window; start height from the tie points
 
   ReconstructionOptions options;
+  options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = 3;
   // The plane start this test was written for: from the tie-point start the finest
   // level's first window oscillates (30 iterations, not converged) although its
@@ -96,6 +97,7 @@ TEST(Reconstruct, CoarsestLevelStepsStayWithinTheCapOfTheTiePointStart) {
       RenderAndRead("scenes/data/seed_gable_parallel.json", testing::TempDir() + "/facets_reconstruct_step_cap");
   auto coarsest_tin = [&](double cap_pixels, double* ground_pixel) {
     ReconstructionOptions options;
+    options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
     options.levels = 3;
     options.finest_level = 1;
     options.start_step_cap_pixels = cap_pixels;
@@ -140,6 +142,7 @@ TEST(Reconstruct, StopsAtACoarserFinestLevel) {
   const RenderedScene rendered =
       RenderAndRead("scenes/data/seed_gable_parallel.json", testing::TempDir() + "/facets_reconstruct_finest_level");
   ReconstructionOptions options;
+  options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = 3;
   options.finest_level = 1;
   options.start = StartSurfaceKind::kPlane;
@@ -219,6 +222,7 @@ TEST(Reconstruct, StopsAtACoarserFinestLevel) {
 // with it a straight chain of vertices sits on the ridge (docs/ENGINE.md, Creases).
 Reconstruction ReconstructRotatedGable(const RenderedScene& rendered, int straighten_rounds) {
   ReconstructionOptions options;
+  options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = 3;
   options.start = StartSurfaceKind::kPlane;
   options.break_off_gsd = 0.06;

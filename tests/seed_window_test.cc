@@ -21,6 +21,7 @@
 #include "scenes/renderer.h"
 #include "scenes/scene.h"
 #include "scenes/truth_mesh.h"
+#include "tests/rendered_scene.h"
 #include "tests/truth_start.h"
 
 namespace facets {
@@ -77,14 +78,17 @@ void AddCorrelatedNoise(double sigma, unsigned seed, ImagePlanes* planes) {
 }
 
 SeedResult RunSeedWindow(const SeedRun& run) {
-  const Scene scene = LoadScene(run.scene_file[0] == '/' ? run.scene_file : std::string(FACETS_SOURCE_DIR) + "/scenes/data/" + run.scene_file);
+  const std::string scene_file = run.scene_file[0] == '/' ? run.scene_file : std::string(FACETS_SOURCE_DIR) + "/scenes/data/" + run.scene_file;
+  const Scene scene = LoadScene(scene_file);
   // One folder per test: ctest runs tests in parallel, and rendering replaces the folder.
-  const std::string dir = testing::TempDir() + "/facets_" +
-                          testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
-                          scene.name + "_" + std::to_string(static_cast<int>(run.noise * 10));
+  // A scene and noise this process rendered before are not rendered again.
   RenderOptions render_options;
   render_options.noise_sigma = run.correlated_noise > 0.0 ? 0.0 : run.noise;
-  RenderScene(scene, dir, render_options);
+  const std::string dir = RenderSceneOnce(
+      scene_file, scene,
+      testing::TempDir() + "/facets_" + testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
+          scene.name + "_" + std::to_string(static_cast<int>(run.noise * 10)),
+      render_options);
 
   const ImageBlock block = ReadColmapModel(dir + "/sparse", dir + "/images");
   LoadedImages loaded;

@@ -19,6 +19,7 @@ TEST(TiledImages, SameSurfaceAsImagesInMemory) {
       RenderAndRead("scenes/data/seed_gable_parallel.json", testing::TempDir() + "/facets_tiled_images_seed_gable");
   ImageBlock block = rendered.block;
   ReconstructionOptions options;
+  options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = 3;
   options.windows.partition.max_faces = 100;  // several windows, each with its own regions
   const Reconstruction memory = Reconstruct(block, options);

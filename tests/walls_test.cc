@@ -27,6 +27,7 @@ double Median(std::vector<double> v) {
 TEST(Walls, BlockBuildingIsValidAndFlagsTheWallOneImageSees) {
   const RenderedScene scene = RenderAndRead("scenes/data/block.json", testing::TempDir() + "/facets_walls_block");
   ReconstructionOptions options;
+  options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = 2;
   options.wall_passes = 1;
   options.windows.sweeps = 1;
@@ -120,6 +121,7 @@ TEST(Walls, NormalSearchStandsTheTallBuildingsWallsUp) {
   };
   auto run = [&](bool search, bool finest_rounds, bool planes = true) {
     ReconstructionOptions options;
+    options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
     options.levels = 4;
     options.roi = roi;
     options.normal_search = search;

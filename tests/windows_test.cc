@@ -18,6 +18,7 @@
 #include "scenes/renderer.h"
 #include "scenes/scene.h"
 #include "scenes/truth_mesh.h"
+#include "tests/rendered_scene.h"
 #include "tests/truth_start.h"
 
 namespace facets {
@@ -30,7 +31,8 @@ struct Compared {
   double rms_one = 0.0, rms_windows = 0.0;     // true height errors (m)
 };
 
-// The windows test scene (seed gable pair, noise 4) rendered into `name`, its images
+// The windows test scene (seed gable pair, noise 4) rendered into `name` (or the folder
+// this process rendered it into before: tests/rendered_scene.h), its images
 // loaded, and a start surface 0.3 m below the truth with 2 m triangles (4x4 facets of
 // 0.5 m: about 2x2 pixels, seed 000). Built in place: the renderer keeps references.
 struct WindowsGable {
@@ -38,10 +40,10 @@ struct WindowsGable {
       : scene(LoadScene(std::string(FACETS_SOURCE_DIR) + "/tests/data/windows_gable.json")),
         truth(BuildTruthMesh(scene)),
         renderer(scene, truth) {
-    const std::string dir = testing::TempDir() + "/" + name;
     RenderOptions render_options;
     render_options.noise_sigma = 4.0;
-    RenderScene(scene, dir, render_options);
+    const std::string dir = RenderSceneOnce(std::string(FACETS_SOURCE_DIR) + "/tests/data/windows_gable.json",
+                                            scene, testing::TempDir() + "/" + name, render_options);
     block = ReadColmapModel(dir + "/sparse", dir + "/images");
     LoadLevelImages(block, /*grey=*/true, &loaded);  // keeps pointers to block's cameras
     start = StartBelowTruth(scene, renderer, 2.0, 0.3);

@@ -1,4 +1,4 @@
-// Which TIN vertices the images can see at all (issue 7). A roof that rises over a
+// Which TIN vertices the images can see at all. A roof that rises over a
 // 2.5D start can fold a sheet of the surface under itself: those vertices lie inside
 // the building, hidden from every image, and the adjustment has nothing to move them
 // with. They are found by casting from every projection centre to every vertex.

@@ -1,9 +1,8 @@
-// A local re-adjustment of a level (the normal search's rounds with
-// ReconstructionOptions::normal_search_local_rings): after a search moved some vertices
-// of an adjusted level, only the windows over the faces within a few edge rings of them
-// run again (LocalScope, engine/level_windows.h), and the round is judged by those
-// windows' sigma0 before and after it (one linearisation each). On the rendered block's
-// level 0 a round then costs about 20 s instead of 35 s (docs/EXPERIMENTS.md, session 15).
+// A local re-adjustment of a level (the trials of engine/pipeline/trial.h): after a stage
+// moved some vertices of an adjusted level, only the windows over the faces within a few
+// edge rings of them run again (LocalScope, engine/pipeline/level_windows.h), and the
+// trial is judged by those windows' sigma0 before and after it (one linearisation each):
+// a few windows instead of the whole level.
 #pragma once
 
 #include <functional>

@@ -1,7 +1,7 @@
-// V-cycles (issue 7): the pyramid descended once more from a coarser level whose TIN
-// is put onto the finished finest surface. Each level transition loses walls at eaves
-// and feet even from a perfect coarser TIN, and a coarse level run from the tie-point
-// start commits some walls metres off (docs/EXPERIMENTS.md, sessions 8 and 11); going
+// V-cycles: the pyramid descended once more from a coarser level whose TIN is put onto
+// the finished finest surface. Each level transition loses walls at eaves and feet even
+// from a perfect coarser TIN, and a coarse level run from the tie-point start commits
+// some walls metres off; going
 // back up with the finest surface's shape gives the coarse level a start that is right
 // where the finest level got it right, and the descent another chance where it did not.
 #pragma once

@@ -1,0 +1,57 @@
+#include "engine/pipeline/trial.h"
+
+#include <utility>
+
+#include "engine/pipeline/local_readjustment.h"
+#include "mesh/surface_validity.h"
+
+namespace facets {
+
+std::string TrialVerdict::Brief() const {
+  return "sigma0 " + std::to_string(now_sigma0) + " against " + std::to_string(was_sigma0) +
+         (local_windows > 0 ? " (" + std::to_string(local_windows) + " local windows)" : "");
+}
+
+TrialVerdict JudgeProposal(const RunContext& run, LevelPass* pass, TinMesh before, int local_rings,
+                           double tolerance) {
+  TrialVerdict verdict;
+  verdict.was_sigma0 = pass->adjusted.summary.sigma0;
+  const bool keep_grey = pass->Finest(run);
+  LevelAdjustment again;
+  if (local_rings >= 0) {
+    LocalReadjustment local =
+        ReadjustAroundMovedVertices(pass->mesh, before, pass->adjusted, local_rings, run.images.ForWindows(pass->level),
+                                    pass->adjustment, run.options.windows, keep_grey, run.options.progress);
+    verdict.ran = local.windows > 0;
+    again = std::move(local.level);
+    verdict.was_sigma0 = local.sigma0_before;
+    verdict.now_sigma0 = local.sigma0_after;
+    verdict.local_windows = local.windows;
+  } else {
+    again = AdjustLevelInWindows(pass->mesh, run.images.ForWindows(pass->level), pass->adjustment,
+                                 run.options.windows, keep_grey, run.options.progress);
+    verdict.now_sigma0 = again.summary.sigma0;
+  }
+  verdict.kept = verdict.ran && verdict.now_sigma0 < verdict.was_sigma0 * (1.0 + tolerance);
+  if (verdict.kept) {
+    pass->adjusted = std::move(again);
+  } else {
+    *pass->mesh = std::move(before);
+  }
+  return verdict;
+}
+
+SurfaceFaults CountSurfaceFaults(const TinMesh& mesh) {
+  return {CountSelfIntersections(mesh), CountFoldedFaces(mesh)};
+}
+
+SurfaceFaults UntangleNewFaults(TinMesh* mesh, const SurfaceFaults& before, int rounds) {
+  SurfaceFaults now = CountSurfaceFaults(*mesh);
+  if (!now.WorseThan(before) || rounds <= 0) return now;
+  now.crossing = UntangleSelfIntersections(mesh, rounds).pairs_after;
+  UpdateVertexNormals(mesh);
+  now.folded = CountFoldedFaces(*mesh);
+  return now;
+}
+
+}  // namespace facets

@@ -1,0 +1,45 @@
+// The one trial mechanism of the stages that move vertices after a level's adjustment
+// (search rounds, crease straightening, wall corners, feet and eaves, lips): propose a
+// move, adjust the level again around it, keep it when the images agree.
+//
+// The level is adjusted again as a whole (local_rings -1, judged by the level's sigma0)
+// or only in the windows over the faces within local_rings edge rings of the moved
+// vertices (judged by their own sigma0 before and after, engine/pipeline/local_readjustment.h).
+#pragma once
+
+#include "engine/pipeline/run_context.h"
+
+namespace facets {
+
+struct TrialVerdict {
+  bool ran = true;         // false: no window to adjust (nothing moved)
+  bool kept = false;
+  double was_sigma0 = 0.0;
+  double now_sigma0 = 0.0;
+  int local_windows = 0;   // 0: the whole level was adjusted again
+
+  // "sigma0 NOW against WAS[ (N local windows)]"
+  std::string Brief() const;
+};
+
+// *pass.mesh holds the proposal, `before` the surface it replaced. Kept when sigma0
+// after < sigma0 before x (1 + tolerance): pass.adjusted becomes the new adjustment;
+// else *pass.mesh is `before` again.
+TrialVerdict JudgeProposal(const RunContext& run, LevelPass* pass, TinMesh before, int local_rings,
+                           double tolerance);
+
+// Crossing triangle pairs and folded faces of a TIN: a proposal may not add any.
+struct SurfaceFaults {
+  int crossing = 0;
+  int folded = 0;
+  bool WorseThan(const SurfaceFaults& before) const {
+    return crossing > before.crossing || folded > before.folded;
+  }
+};
+SurfaceFaults CountSurfaceFaults(const TinMesh& mesh);
+
+// A proposal that adds faults is untangled (at most `rounds` rounds of
+// UntangleSelfIntersections); returns the faults left.
+SurfaceFaults UntangleNewFaults(TinMesh* mesh, const SurfaceFaults& before, int rounds);
+
+}  // namespace facets
