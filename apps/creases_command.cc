@@ -11,23 +11,20 @@
 #include "io/ply_io.h"
 #include "mesh/surface_validity.h"
 #include "mesh/tin.h"
-#include "refine/wall_corners.h"
 
 namespace facets {
 
 CreasesSummary RunCreases(const CreasesArgs& args, std::ostream& log) {
-  if (!(args.edge > 0.0)) throw std::invalid_argument("--edge must be > 0 (the level's target edge length, m)");
+  if (!(args.corners.edge_length > 0.0)) {
+    throw std::invalid_argument("--edge must be > 0 (the level's target edge length, m)");
+  }
   if (args.untangle_rounds < 0) throw std::invalid_argument("--untangle-rounds must be >= 0");
-  if (args.no_corners && args.no_feet && args.no_eaves) throw std::invalid_argument("nothing to lay: all three kinds left out");
-  TinMesh mesh = LoadStartMesh(args.tin);
-  WallCornerOptions options;
-  options.edge_length = args.edge;
-  options.vertical = !args.no_corners;
-  options.feet = !args.no_feet;
-  options.eaves = !args.no_eaves;
-  if (args.min_angle > 0.0) options.min_corner_angle_deg = args.min_angle;
-  options.merge_wall_pieces = !args.no_merge;
+  const WallCornerOptions& options = args.corners;
+  if (!options.vertical && !options.feet && !options.eaves) {
+    throw std::invalid_argument("nothing to lay: all three kinds left out");
+  }
   options.Check();
+  TinMesh mesh = LoadStartMesh(args.tin);
   WallCornerSearch search = FindWallCorners(mesh, options);
   // The engine's order: vertical corners first (their bands end short of feet and eaves).
   std::stable_sort(search.corners.begin(), search.corners.end(),
@@ -84,19 +81,22 @@ void AddCreasesCommand(CLI::App& app) {
   auto args = std::make_shared<CreasesArgs>();
   CLI::App* sub = app.add_subcommand(
       "creases",
-      "lay a TIN's vertical building corners, walls' feet and eaves onto their planes without images (the crease "
-      "step of --thorough-walls; give it levels/level_0_creases.ply of a --keep-levels run)");
+      "lay a TIN's vertical building corners, walls' feet and eaves onto their planes without images (the wall "
+      "crease step of `facets reconstruct`; give it levels/level_0_creases.ply of a --keep-levels run)");
   sub->add_option("tin", args->tin, "TIN (PLY, OBJ)")->required();
   sub->add_option("--out", args->out, "output TIN (PLY)")->required();
-  sub->add_option("--edge", args->edge, "the level's target edge length in m (4 x facet pixels x ground pixel)")
+  WallCornerOptions& corners = args->corners;
+  sub->add_option("--edge", corners.edge_length,
+                  "the level's target edge length in m (4 x facet pixels x ground pixel)")
       ->required();
-  sub->add_flag("--no-corners", args->no_corners, "leave vertical corners out");
-  sub->add_flag("--no-feet", args->no_feet, "leave walls' feet out");
-  sub->add_flag("--no-eaves", args->no_eaves, "leave eaves out");
-  sub->add_option("--min-angle", args->min_angle,
-                  "least angle in degrees between two walls' normals for a vertical corner (default as "
-                  "--wall-corner-min-angle)");
-  sub->add_flag("--no-merge", args->no_merge, "keep the planar wall pieces apart (as --no-wall-merge)");
+  sub->add_flag("!--no-corners", corners.vertical, "leave vertical corners out");
+  sub->add_flag("!--no-feet", corners.feet, "leave walls' feet out");
+  sub->add_flag("!--no-eaves", corners.eaves, "leave eaves out");
+  sub->add_option("--min-angle", corners.min_corner_angle_deg,
+                  "least angle in degrees between two walls' normals for a vertical corner (as "
+                  "reconstruct's --wall-corner-min-angle)")
+      ->capture_default_str();
+  sub->add_flag("!--no-merge", corners.merge_wall_pieces, "keep the planar wall pieces apart (as --no-wall-merge)");
   sub->add_option("--untangle-rounds", args->untangle_rounds, "untangling rounds before a crease is left")
       ->capture_default_str();
   sub->callback([args] {

@@ -1,6 +1,7 @@
 // `facets creases TIN.ply --edge H --out OUT.ply [--no-corners] [--no-feet] [--no-eaves]
-//  [--min-angle DEG] [--untangle-rounds N]`: the crease step of --thorough-walls
-// (mesh/wall_corners.h) on a TIN, without images.
+//  [--min-angle DEG] [--no-merge] [--untangle-rounds N]`: the wall crease step of a
+// reconstruction (`--wall-corners --wall-feet --wall-eaves`, on in the aerial scene
+// preset; refine/wall_corners.h) on a TIN, without images.
 //
 // Every vertical corner, foot and eave FindWallCorners finds is laid onto its two planes
 // (LayCornerOntoWalls), one at a time in the engine's order, and kept unless it leaves
@@ -8,22 +9,27 @@
 // untangling). The engine judges each crease by its images too; this command shows what
 // the geometry alone does, in a minute instead of a reconstruction's half hour: give it
 // the TIN the corner step started from (`facets reconstruct --keep-levels` writes it as
-// levels/level_0_creases.ply) and score the output with `facets evaluate --mesh`
-// (docs/EXPERIMENTS.md, session 34).
+// levels/level_0_creases.ply) and score the output with `facets evaluate --mesh`.
 #pragma once
 
 #include <CLI/CLI.hpp>
 #include <string>
+
+#include "refine/wall_corners.h"
 
 namespace facets {
 
 struct CreasesArgs {
   std::string tin;
   std::string out;
-  double edge = 0.0;  // the level's target edge length, m (the reconstruction's log)
-  bool no_corners = false, no_feet = false, no_eaves = false;
-  double min_angle = 0.0;  // 0: WallCornerOptions' default
-  bool no_merge = false;   // WallCornerOptions::merge_wall_pieces off
+  // edge_length: the level's target edge length, m (the reconstruction's log); all three
+  // kinds of crease on unless left out.
+  WallCornerOptions corners = [] {
+    WallCornerOptions all;
+    all.edge_length = 0.0;
+    all.vertical = all.feet = all.eaves = true;
+    return all;
+  }();
   int untangle_rounds = 4;
 };
 
