@@ -18,6 +18,7 @@
 #include "apps/reconstruct_options.h"
 #include "engine/pipeline/products.h"
 #include "engine/pipeline/reconstruction.h"
+#include "engine/pipeline/radiometry_choice.h"
 #include "engine/pipeline/scene_preset.h"
 #include "io/atomic_file.h"
 #include "io/colmap_io.h"
@@ -66,8 +67,14 @@ void ChooseOptions(const ImageBlock& block, ReconstructCommandLine* line, const 
     say("scene: " + ScenePresetName(preset) + " (given)");
   }
   line->app.scene = preset;
-  const SceneApplication applied = ApplySceneAndGivenOptions(preset, line);
-  say("  the preset sets: " + (applied.preset.empty() ? std::string("nothing") : applied.preset));
+  std::function<void(ReconstructionOptions*)> from_data;
+  if (!OptionGiven(*line, "--radiometry")) {
+    const RadiometryChoice radiometry = ChooseRadiometry(block);
+    say("radiometry: " + radiometry.why);
+    from_data = [model = radiometry.model](ReconstructionOptions* options) { options->adjustment.radiometry = model; };
+  }
+  const SceneApplication applied = ApplySceneAndGivenOptions(preset, line, from_data);
+  say("  the preset and the images set: " + (applied.preset.empty() ? std::string("nothing") : applied.preset));
   say("  options given: " + (applied.given.empty() ? std::string("none") : applied.given));
 }
 

@@ -127,12 +127,21 @@ void BindReconstructOptions(CLI::App* sub, ReconstructCommandLine* line) {
       "--help-all: also the expert options (each can be set in the --config file too).");
 }
 
-SceneApplication ApplySceneAndGivenOptions(ScenePreset preset, ReconstructCommandLine* line) {
+bool OptionGiven(const ReconstructCommandLine& line, const std::string& name) {
+  for (const CLI::Option* option : line.engine_options) {
+    if (option->check_name(name)) return option->count() > 0;
+  }
+  return false;
+}
+
+SceneApplication ApplySceneAndGivenOptions(ScenePreset preset, ReconstructCommandLine* line,
+                                           const std::function<void(ReconstructionOptions*)>& from_data) {
   const std::vector<CLI::Option*>& bound = line->engine_options;
   const ReconstructionOptions library_defaults;
   line->options = library_defaults;  // a copy: GCC 12 warns falsely on moving from a temporary
   const std::vector<std::string> defaults = CurrentValues(bound);
   ApplyScenePreset(preset, &line->options);
+  if (from_data) from_data(&line->options);
   const std::vector<std::string> preset_values = CurrentValues(bound);
   // Options given (on the command line or in the --config file) set their fields again.
   for (CLI::Option* option : bound) {

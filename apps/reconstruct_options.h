@@ -10,6 +10,8 @@
 // in the --config file are then set over the preset (ApplySceneAndGivenOptions).
 #pragma once
 
+#include <functional>
+
 #include <CLI/CLI.hpp>
 #include <string>
 #include <vector>
@@ -55,7 +57,11 @@ struct SceneApplication {
 
 // line->options = the library's defaults, the preset applied over them, then every option
 // given on the command line or in the --config file set again over that.
-SceneApplication ApplySceneAndGivenOptions(ScenePreset preset, ReconstructCommandLine* line);
+// `from_data` (may be empty) sets what the images decide (radiometry) after the preset.
+SceneApplication ApplySceneAndGivenOptions(ScenePreset preset, ReconstructCommandLine* line,
+                                           const std::function<void(ReconstructionOptions*)>& from_data = {});
+// Whether the option (e.g. "--radiometry") was given on the command line or in --config.
+bool OptionGiven(const ReconstructCommandLine& line, const std::string& name);
 
 // Every option of `sub` with its current value in the form --config reads: a
 // [reconstruct] section of `key=value` lines (options without a value left out).

@@ -71,6 +71,13 @@ double LargestAzimuthGap(const ImageBlock& block, const Eigen::Vector3d& centre,
   return gap;
 }
 
+// Mean of the cameras' unit viewing directions (their z axes in the world).
+Eigen::Vector3d MeanViewDirection(const ImageBlock& block) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& image : block.images) mean += image.cam_from_world.rotation.conjugate() * Eigen::Vector3d::UnitZ();
+  return mean / static_cast<double>(block.images.size());
+}
+
 // Median elevation of the cameras above the plane through the centre normal to up (deg).
 double MedianElevation(const ImageBlock& block, const Eigen::Vector3d& centre, const Eigen::Vector3d& up) {
   std::vector<double> elevations;
@@ -103,14 +110,19 @@ std::string ScenePresetName(ScenePreset preset) {
 
 ScenePreset ChooseScenePreset(const ImageBlock& block, std::string* why) {
   if (block.images.empty()) throw std::invalid_argument("choosing a scene preset: the block has no images");
+  // Aerial: the images look down the model's Z (georeferenced blocks have Z up) onto tie
+  // points spread less than half as far along Z as across it.
+  const Eigen::Vector3d view = MeanViewDirection(block);
+  const double off_nadir = std::acos(std::clamp(-view.normalized().z(), -1.0, 1.0)) * 180.0 / kPi;
+  const auto [height, width] = TiePointSpread(block, Eigen::Vector3d::UnitZ());
+  const bool flat = width > 0.0 ? height < 0.5 * width : true;
+  // Object: the cameras surround the tie points' centre about the scene's up (the
+  // cameras' mean up when they agree on one, else Z).
   const Eigen::Vector3d up = SceneUp(block);
   const Eigen::Vector3d centre = SceneCentre(block);
-  const double elevation = MedianElevation(block, centre, up);
   const double gap = LargestAzimuthGap(block, centre, up);
-  const auto [vertical, horizontal] = TiePointSpread(block, up);
-  const bool flat = horizontal > 0.0 ? vertical < 0.5 * horizontal : true;
   ScenePreset preset = ScenePreset::kFacade;
-  if (elevation > 35.0 && flat) {
+  if (view.norm() > 0.7 && off_nadir < 45.0 && flat) {
     preset = ScenePreset::kAerial;
   } else if (gap < 150.0) {
     preset = ScenePreset::kObject;
@@ -118,8 +130,9 @@ ScenePreset ChooseScenePreset(const ImageBlock& block, std::string* why) {
   if (why) {
     std::ostringstream line;
     line.precision(3);
-    line << "cameras " << elevation << " deg above the tie points' centre (median), largest azimuth gap " << gap
-         << " deg, tie points " << vertical << " m along up against " << horizontal << " m across";
+    line << "mean view " << off_nadir << " deg off nadir (length " << view.norm() << "), tie points " << height
+         << " m high against " << width << " m wide, cameras " << MedianElevation(block, centre, up)
+         << " deg above their centre with a largest azimuth gap of " << gap << " deg";
     *why = line.str();
   }
   return preset;
@@ -140,7 +153,6 @@ void ApplyScenePreset(ScenePreset preset, ReconstructionOptions* options) {
       break;
     case ScenePreset::kFacade:
       options->start_plane = ReconstructionOptions::StartPlane::kFitted;
-      options->adjustment.radiometry = RadiometricModel::kLinear;
       break;
     case ScenePreset::kObject:
       options->start_closed = true;
