@@ -29,7 +29,6 @@ TEST(Walls, BlockBuildingIsValidAndFlagsTheWallOneImageSees) {
   ReconstructionOptions options;
   options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = 2;
-  options.wall_passes = 1;
   options.windows.sweeps = 1;
   options.adjustment.max_iterations = 10;
   RegionOfInterest roi;
@@ -40,7 +39,7 @@ TEST(Walls, BlockBuildingIsValidAndFlagsTheWallOneImageSees) {
   ASSERT_EQ(r.report.levels.size(), 2u);
   for (const LevelReport& level : r.report.levels) {
     std::cout << "level " << level.level << ": " << level.faces << " faces, sigma0 " << level.window.sigma0
-              << ", " << level.wall_passes.size() << " wall passes, " << level.folded_faces << " folded, "
+              << ", " << level.folded_faces << " folded, "
               << level.self_intersections << " self-intersecting pairs, " << level.fold_limited
               << " steps limited\n";
   }
