@@ -251,14 +251,6 @@ bool FitSidePlanes(const TinMesh& mesh, const std::vector<int>& kept, const Line
   return planar;
 }
 
-// Whether the line between the side planes is of the kind asked for.
-bool OfKind(const SidePlanes& planes, CreaseLines lines) {
-  if (lines == CreaseLines::kAll) return true;
-  const double min_roof_nz = std::cos(kSteepCreaseSideDeg * M_PI / 180.0);
-  const bool steep = std::abs(planes.normal[0].z()) < min_roof_nz || std::abs(planes.normal[1].z()) < min_roof_nz;
-  return steep == (lines == CreaseLines::kSteep);
-}
-
 // Moves *line onto the line where the side planes meet, when they meet at
 // kCreaseMinDeg or more, within 20 degrees of the line and within an edge of its centre.
 bool LineWherePlanesMeet(const SidePlanes& planes, double h, Line* line) {
@@ -531,7 +523,7 @@ void LayChainOnLine(TinMesh* mesh, const std::vector<int>& chain, const Line& li
 }
 
 // Straightens one candidate run (or counts why not).
-void StraightenRun(TinMesh* mesh, const Candidate& candidate, CreaseLines lines, int min_edges, double max_offset,
+void StraightenRun(TinMesh* mesh, const Candidate& candidate, int min_edges, double max_offset,
                    StraightenReport* report) {
   const double h = candidate.h;
   std::vector<int> kept = candidate.vertices;
@@ -557,10 +549,6 @@ void StraightenRun(TinMesh* mesh, const Candidate& candidate, CreaseLines lines,
     ++report->sides_not_planar;
     return;
   }
-  if (!OfKind(planes, lines)) {
-    ++report->other_kind;
-    return;
-  }
   if (!LineWherePlanesMeet(planes, h, &line)) {
     ++report->sides_not_meeting;
     return;
@@ -576,11 +564,11 @@ void StraightenRun(TinMesh* mesh, const Candidate& candidate, CreaseLines lines,
 
 }  // namespace
 
-StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& crease_edge, CreaseLines lines,
-                                        int min_edges, double max_offset) {
+StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& crease_edge, int min_edges,
+                                        double max_offset) {
   StraightenReport report;
   const std::vector<Candidate> candidates = CandidateRuns(*mesh, crease_edge, min_edges, max_offset, &report);
-  for (const Candidate& candidate : candidates) StraightenRun(mesh, candidate, lines, min_edges, max_offset, &report);
+  for (const Candidate& candidate : candidates) StraightenRun(mesh, candidate, min_edges, max_offset, &report);
   if (report.moved > 0) UpdateVertexNormals(mesh);
   return report;
 }

@@ -11,15 +11,6 @@
 
 namespace facets {
 
-// Which straight runs StraightenCreaseChains takes, by the planes that meet on them
-// (+Z up, as in aerial scenes; closed starts do not straighten): roof lines (ridges,
-// hips, valleys: both planes within kSteepCreaseSideDeg of horizontal) or steep lines
-// (eaves and feet, where a wall meets a roof or the ground). A caller may straighten
-// the two kinds in rounds of their own and keep each round only when it fits better,
-// so that the eaves of crumpled walls do not take the ridges' round down with them.
-enum class CreaseLines { kAll, kRoof, kSteep };
-constexpr double kSteepCreaseSideDeg = 60.0;
-
 // A ridge skew to the grid of a TIN becomes a zigzag of crease edges: the vertices can
 // only move along their normals, so none lies on the ridge, and the crease vertices
 // (free of curvature regularisation) spike to fit it. This puts chains of vertices on
@@ -64,10 +55,9 @@ struct StraightenReport {
   int sides_not_planar = 0;   // the surface 1-3 edges away on a side is not a plane (or too few vertices)
   int sides_not_meeting = 0;  // side planes under 10 degrees apart, over 20 degrees off the line, or over an edge away
   int no_chain = 0;           // no vertex chain to follow along the line
-  int other_kind = 0;         // runs of the kind of line not asked for (CreaseLines)
 };
 StraightenReport StraightenCreaseChains(TinMesh* mesh, const std::vector<bool>& crease_edge,
-                                        CreaseLines lines = CreaseLines::kAll, int min_edges = 3,
+                                        int min_edges = 3,
                                         double max_offset = 0.75);
 
 }  // namespace facets

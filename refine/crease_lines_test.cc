@@ -89,50 +89,6 @@ TEST(CreaseLines, RidgeSkewToTheGridEndsAsAStraightChainOfCreaseEdges) {
   EXPECT_EQ(CountCaps(mesh), 0);
 }
 
-// Roof lines and steep lines (eaves, feet) can be straightened in rounds of their own
-// (CreaseLines). A roof ridge (planes at 20 degrees) is a roof line; a crease where a
-// wall-steep plane meets (a ridge at 70 degrees, as steep as a wall beside an eave) is a
-// steep line. Each kind is taken only when asked for and counted as the other kind
-// otherwise.
-TEST(CreaseLines, RoofLinesAndSteepLinesAreStraightenedOnlyWhenAskedFor) {
-  const double steep_slope = std::tan(70.0 * M_PI / 180.0);
-  auto steep_ridge = [=](double x, double y) { return 10.0 - steep_slope * std::abs(SkewRidgeDistance(x, y)); };
-  struct Case {
-    std::function<double(double, double)> height;
-    CreaseLines lines;
-    bool taken;
-    int min_moved;  // measured: 15 on the gable; 5 on the steep ridge, narrow in plan
-  };
-  const std::vector<Case> cases = {{SkewGableHeight, CreaseLines::kRoof, true, 13},
-                                   {SkewGableHeight, CreaseLines::kSteep, false, 0},
-                                   {SkewGableHeight, CreaseLines::kAll, true, 13},
-                                   {steep_ridge, CreaseLines::kSteep, true, 5},
-                                   {steep_ridge, CreaseLines::kRoof, false, 0},
-                                   {steep_ridge, CreaseLines::kAll, true, 5}};
-  for (const Case& c : cases) {
-    TinMesh mesh = GridMesh(6, c.height);
-    const StraightenReport report = StraightenCreaseChains(&mesh, DetectCreaseEdges(mesh, 20.0), c.lines);
-    std::cout << "lines " << static_cast<int>(c.lines) << ": " << report.components << " straightened, "
-              << report.moved << " moved, " << report.other_kind << " of the other kind\n";
-    EXPECT_EQ(report.components, c.taken ? 1 : 0);
-    EXPECT_EQ(report.other_kind, c.taken ? 0 : 1);
-    if (c.taken) {
-      EXPECT_GE(report.moved, c.min_moved);
-    } else {
-      EXPECT_EQ(report.moved, 0);
-    }
-  }
-}
-
-// A hip roof over a square, turned 11.3 degrees to a 1 m grid: its four hip lines meet
-// at the top and make one connected set of crease edges, an X that no single line fits.
-// StraightenCreaseChains cuts the set into straight runs (one per hip line) and puts
-// each on the line where its two roof faces meet.
-double PyramidHeight(double x, double y) {
-  const double u = std::cos(kSkew) * x + std::sin(kSkew) * y, v = -std::sin(kSkew) * x + std::cos(kSkew) * y;
-  return 4.0 - 0.6 * std::max(std::abs(u), std::abs(v));
-}
-
 TEST(CreaseLines, HipLinesMeetingAtTheTopAreStraightenedOneByOne) {
   TinMesh mesh = GridMesh(6, PyramidHeight);
   auto max_error = [](const TinMesh& m) {
