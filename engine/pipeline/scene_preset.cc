@@ -116,15 +116,16 @@ ScenePreset ChooseScenePreset(const ImageBlock& block, std::string* why) {
   const double off_nadir = std::acos(std::clamp(-view.normalized().z(), -1.0, 1.0)) * 180.0 / kPi;
   const auto [height, width] = TiePointSpread(block, Eigen::Vector3d::UnitZ());
   const bool flat = width > 0.0 ? height < 0.5 * width : true;
-  // Object: the cameras surround the tie points' centre about the scene's up (the
-  // cameras' mean up when they agree on one, else Z).
+  // Object: the images look from all sides (their viewing directions cancel out to less
+  // than half a unit), or the cameras surround the tie points' centre about the scene's
+  // up (the cameras' mean up when they agree on one, else Z).
   const Eigen::Vector3d up = SceneUp(block);
   const Eigen::Vector3d centre = SceneCentre(block);
   const double gap = LargestAzimuthGap(block, centre, up);
   ScenePreset preset = ScenePreset::kFacade;
   if (view.norm() > 0.7 && off_nadir < 45.0 && flat) {
     preset = ScenePreset::kAerial;
-  } else if (gap < 150.0) {
+  } else if (view.norm() < 0.5 || gap < 150.0) {
     preset = ScenePreset::kObject;
   }
   if (why) {

@@ -29,9 +29,10 @@ std::string ScenePresetName(ScenePreset preset);
 // The preset the cameras and tie points point to, with the reason in one line (*why).
 // Aerial: the images' mean viewing direction is longer than 0.7 (they look one way) and
 // within 45 deg of -Z, and the tie points spread less than half as far along Z as across
-// it. Object: the cameras surround the tie points' centre (no gap of 150 deg or more in
-// their azimuths about up: the cameras' mean up where they agree on one, else Z).
-// Facade: the rest (the cameras on one side).
+// it. Object: the viewing directions cancel out to a mean shorter than 0.5 (the images
+// look from all sides), or the cameras surround the tie points' centre (no gap of 150 deg
+// or more in their azimuths about up: the cameras' mean up where they agree on one,
+// else Z). Facade: the rest (the cameras on one side).
 ScenePreset ChooseScenePreset(const ImageBlock& block, std::string* why);
 
 // Sets on *options what the preset means (kAuto: nothing).

@@ -41,7 +41,7 @@ TEST(ScenePreset, AerialSetsTheWallBundleOverTheDefaults) {
 TEST(ScenePreset, RenderedNadirPairIsAerial) {
   const std::string dir = (fs::temp_directory_path() / ("facets_scene_preset_" + std::to_string(getpid()))).string();
   const RenderedScene rendered =
-      RenderAndRead(std::string(FACETS_SOURCE_DIR) + "/scenes/data/seed_gable_parallel.json", dir);
+      RenderAndRead("scenes/data/seed_gable_parallel.json", dir);
   std::string why;
   EXPECT_EQ(ChooseScenePreset(rendered.block, &why), ScenePreset::kAerial) << why;
   std::printf("seed pair: %s\n", why.c_str());
