@@ -89,6 +89,15 @@ TEST(CreaseLines, RidgeSkewToTheGridEndsAsAStraightChainOfCreaseEdges) {
   EXPECT_EQ(CountCaps(mesh), 0);
 }
 
+// A hip roof over a square, turned 11.3 degrees to a 1 m grid: its four hip lines meet
+// at the top and make one connected set of crease edges, an X that no single line fits.
+// StraightenCreaseChains cuts the set into straight runs (one per hip line) and puts
+// each on the line where its two roof faces meet.
+double PyramidHeight(double x, double y) {
+  const double u = std::cos(kSkew) * x + std::sin(kSkew) * y, v = -std::sin(kSkew) * x + std::cos(kSkew) * y;
+  return 4.0 - 0.6 * std::max(std::abs(u), std::abs(v));
+}
+
 TEST(CreaseLines, HipLinesMeetingAtTheTopAreStraightenedOneByOne) {
   TinMesh mesh = GridMesh(6, PyramidHeight);
   auto max_error = [](const TinMesh& m) {
