@@ -29,6 +29,9 @@ TEST(Walls, BlockBuildingIsValidAndFlagsTheWallOneImageSees) {
   ReconstructionOptions options;
   options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = 2;
+  // The finest level's stretched wall edges split and adjusted again (the first step of
+  // the wall-corner stage), so that the walls carry vertices to flag.
+  options.wall_corners = true;
   options.windows.sweeps = 1;
   options.adjustment.max_iterations = 10;
   RegionOfInterest roi;
