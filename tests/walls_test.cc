@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include "engine/pipeline/reconstruction.h"
+#include "engine/pipeline/scene_preset.h"
 #include "mesh/closed_surface.h"
 #include "refine/facet_crossings.h"
 #include "mesh/surface_validity.h"
@@ -26,12 +27,11 @@ double Median(std::vector<double> v) {
 
 TEST(Walls, BlockBuildingIsValidAndFlagsTheWallOneImageSees) {
   const RenderedScene scene = RenderAndRead("scenes/data/block.json", testing::TempDir() + "/facets_walls_block");
+  // The aerial path (wall searches, V-cycle, corners, feet and eaves) on two levels.
   ReconstructionOptions options;
+  ApplyScenePreset(ScenePreset::kAerial, &options);
   options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = 2;
-  // The finest level's stretched wall edges split and adjusted again (the first step of
-  // the wall-corner stage), so that the walls carry vertices to flag.
-  options.wall_corners = true;
   options.windows.sweeps = 1;
   options.adjustment.max_iterations = 10;
   RegionOfInterest roi;
@@ -39,7 +39,7 @@ TEST(Walls, BlockBuildingIsValidAndFlagsTheWallOneImageSees) {
   roi.max = Eigen::Vector3d(25, -9, 20);
   options.roi = roi;
   const Reconstruction r = Reconstruct(scene.block, options);
-  ASSERT_EQ(r.report.levels.size(), 2u);
+  ASSERT_EQ(r.report.levels.size(), 4u);  // the descent and the V-cycle, two levels each
   for (const LevelReport& level : r.report.levels) {
     std::cout << "level " << level.level << ": " << level.faces << " faces, sigma0 " << level.window.sigma0
               << ", " << level.folded_faces << " folded, "
@@ -93,7 +93,9 @@ TEST(Walls, BlockBuildingIsValidAndFlagsTheWallOneImageSees) {
             << ")\n";
   ASSERT_GT(south, 3);
   ASSERT_GT(seen, 6);
-  EXPECT_GT(south_flagged, south / 2);
+  // Vertices near the south wall's eave and foot are also seen by the views of the roof
+  // and the ground: a third of the band at least, against under a quarter elsewhere.
+  EXPECT_GT(south_flagged, south / 3);
   EXPECT_LT(seen_flagged, seen / 4);
   EXPECT_GT(Median(sigma_flagged), Median(sigma_three));
 }
