@@ -78,16 +78,6 @@ Eigen::Vector3d MeanViewDirection(const ImageBlock& block) {
   return mean / static_cast<double>(block.images.size());
 }
 
-// Median elevation of the cameras above the plane through the centre normal to up (deg).
-double MedianElevation(const ImageBlock& block, const Eigen::Vector3d& centre, const Eigen::Vector3d& up) {
-  std::vector<double> elevations;
-  for (const auto& image : block.images) {
-    const Eigen::Vector3d d = (image.ProjectionCentre() - centre).normalized();
-    elevations.push_back(std::asin(std::clamp(d.dot(up), -1.0, 1.0)) * 180.0 / kPi);
-  }
-  return Quantile(elevations, 0.5);
-}
-
 }  // namespace
 
 ScenePreset ParseScenePreset(const std::string& name) {
@@ -132,8 +122,8 @@ ScenePreset ChooseScenePreset(const ImageBlock& block, std::string* why) {
     std::ostringstream line;
     line.precision(3);
     line << "mean view " << off_nadir << " deg off nadir (length " << view.norm() << "), tie points " << height
-         << " m high against " << width << " m wide, cameras " << MedianElevation(block, centre, up)
-         << " deg above their centre with a largest azimuth gap of " << gap << " deg";
+         << " m high against " << width << " m wide, largest gap between the cameras' azimuths " << gap
+         << " deg";
     *why = line.str();
   }
   return preset;
