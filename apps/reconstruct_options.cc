@@ -75,7 +75,8 @@ void BindQuality(const OptionBinder& bind, ReconstructAppSettings& app, Reconstr
                 {{"none", RadiometricModel::kNone},
                  {"constant", RadiometricModel::kConstant},
                  {"linear", RadiometricModel::kLinear}},
-                "grey-value offset (constant) and scale (linear) per image; real photographs need linear");
+                "grey-value offset (constant) and scale (linear) per image; not given: chosen from the tie "
+                "points' brightness in each image (printed): linear where the exposure differs");
   engine.Switch("--colour", options.colour, "one grey value per colour channel (geometry shared)");
   engine.Value("--lambda", options.adjustment.lambda, "weight of the curvature regularisation (docs/ENGINE.md)");
   engine.Value("--facet-pixels", options.facet_pixels,
