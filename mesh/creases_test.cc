@@ -10,9 +10,12 @@
 
 #include "mesh/local_ops.h"
 #include "mesh/tessellation.h"
+#include "mesh/test_util.h"
 
 namespace facets {
 namespace {
+
+using ::facets::testing::GridMesh;
 
 constexpr double kSlope = 0.36397023426620234;  // tan(20 deg)
 
@@ -24,16 +27,6 @@ TinMesh GableMesh() {
   grid.max = Eigen::Vector2d(4, 4);
   grid.spacing = 1.0;  // the ridge y = 0 runs along grid vertices
   grid.height = GableHeight;
-  return MakeStartGrid(grid);
-}
-
-// A 1 m grid over [-half, half]^2 sampling the height function.
-TinMesh GridMesh(double half, std::function<double(double, double)> height) {
-  StartGridOptions grid;
-  grid.min = Eigen::Vector2d(-half, -half);
-  grid.max = Eigen::Vector2d(half, half);
-  grid.spacing = 1.0;
-  grid.height = std::move(height);
   return MakeStartGrid(grid);
 }
 

@@ -8,6 +8,16 @@
 
 namespace facets::testing {
 
+// A 1 m grid over [-half, half]^2 (in m) sampling the height function.
+inline TinMesh GridMesh(double half, std::function<double(double, double)> height) {
+  StartGridOptions grid;
+  grid.min = Eigen::Vector2d(-half, -half);
+  grid.max = Eigen::Vector2d(half, half);
+  grid.spacing = 1.0;
+  grid.height = std::move(height);
+  return MakeStartGrid(grid);
+}
+
 // Unit sphere cap over [-0.5, 0.5]^2 (z = sqrt(1 - x^2 - y^2)) at grid spacing h,
 // with the exact sphere normals.
 inline TinMesh SphereCap(double h, double half = 0.5) {

@@ -10,21 +10,14 @@
 #include "mesh/creases.h"
 #include "mesh/local_ops.h"
 #include "mesh/tessellation.h"
+#include "mesh/test_util.h"
 
 namespace facets {
 namespace {
 
-constexpr double kSlope = 0.36397023426620234;  // tan(20 deg)
+using ::facets::testing::GridMesh;
 
-// A 1 m grid over [-half, half]^2 (in m) sampling the height function.
-TinMesh GridMesh(double half, std::function<double(double, double)> height) {
-  StartGridOptions grid;
-  grid.min = Eigen::Vector2d(-half, -half);
-  grid.max = Eigen::Vector2d(half, half);
-  grid.spacing = 1.0;
-  grid.height = std::move(height);
-  return MakeStartGrid(grid);
-}
+constexpr double kSlope = 0.36397023426620234;  // tan(20 deg)
 
 // A gable ridge at 11.3 degrees to a 1 m grid: sampled at the grid vertices, its
 // creases are a zigzag of edges and the G1 surface cuts the ridge off between them.
