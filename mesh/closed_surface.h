@@ -1,4 +1,4 @@
-// Closed start surfaces for objects (issue 9): an evenly triangulated ellipsoid, a TIN
+// Closed start surfaces for objects: an evenly triangulated ellipsoid, a TIN
 // from a triangle list, and the check that a surface is closed and free of
 // self-intersections (CGAL Polygon_mesh_processing).
 #pragma once

@@ -1,4 +1,4 @@
-// Crossing surface facets in the products (issue 7: no self-intersections in the output).
+// Crossing surface facets in the products: the output may not intersect itself.
 //
 // The TIN can be free of self-intersections while the G1 tessellation over it is not: a
 // Nielson patch bulges off its chord by up to a few percent of an edge, and where two

@@ -1,5 +1,5 @@
 // Unseen lips: sheets of the surface that left a wall's top as a lip and came back
-// under themselves to the wall further down (issue 7, docs/EXPERIMENTS.md sessions 24-26).
+// under themselves to the wall further down.
 //
 // On the block's tall building (thorough run) the surface leaves the roof edge as a lip
 // up to 3 m in front of the east wall and folds back to the wall at mid height. The
@@ -11,9 +11,8 @@
 // surface facing down that no image sees, only overhangs seen from below by obliques.
 //
 // The same holds for a pocket: a sheet that goes into the building behind a seen wall
-// (the block's hip building, thorough run of session 27: ground running 1-1.5 m under
-// the wall, the wall standing up behind its true place and coming back at mid height;
-// half the squared wall error), seen by no image because its own rims hide it.
+// (e.g. ground running 1-1.5 m under the wall, the wall standing up behind its true place
+// and coming back at mid height), seen by no image because its own rims hide it.
 //
 // The operation: groups of unseen steep or down-facing vertices beside a wall seen by
 // two or more images; the wall's plane fitted to the seen steep vertices around the
@@ -106,8 +105,8 @@ struct LipFold {
 LipFold LayLipOntoWall(TinMesh* mesh, const UnseenLip& lip, int iterations = 2000);
 
 // A laid lip whose sheet meets the held wall at a small crumple folds a face or two
-// there (the held ring is where the images put it, a few cm off the fitted plane; block
-// A thorough, session 29: a 5 m lip of 146 vertices left for 1-2 such faces). The corners
+// there (the held ring is where the images put it, a few cm off the fitted plane: a 5 m
+// lip of 146 vertices can be left for 1-2 such faces). The corners
 // of faces folded now but not in folded_before (FoldedFaces, by face index) that are
 // not the lip's and lie within reach of the wall plane (the caller: the lip's front
 // tolerance, within which a vertex counts as the wall's) are projected onto it; up to

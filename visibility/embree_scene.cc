@@ -21,8 +21,8 @@ void ErrorCallback(void*, RTCError code, const char* message) {
 
 EmbreeDevice::EmbreeDevice() {
   // Embree picks its kernels by the CPU (SSE4.2, AVX2, AVX-512), and ray hits on edges,
-  // and every decision that follows from them, can differ between machines (block A by
-  // default, docs/EXPERIMENTS.md session 27). FACETS_EMBREE_CONFIG passes a device
+  // and every decision that follows from them, can differ between machines.
+  // FACETS_EMBREE_CONFIG passes a device
   // configuration, e.g. "isa=avx2", to compare runs across machines.
   const char* config = std::getenv("FACETS_EMBREE_CONFIG");
   device_ = rtcNewDevice(config && *config ? config : nullptr);

@@ -1,4 +1,4 @@
-// Silhouettes (issue 9): where a mesh covers an image, where the image shows the object
+// Silhouettes: where a mesh covers an image, where the image shows the object
 // before a dark background, and how well the two agree (intersection over union).
 //
 // - Foreground: pixels whose grey value (mean over channels) exceeds a threshold of the
