@@ -174,9 +174,12 @@ struct EvaluationReport {
   // check had to leave out (degenerate or non-manifold after the merge).
   TriangleCrossings mesh_crossings;
 
-  // The region's row or nullptr (label -1 = all regions).
-  const RegionScore* Region(int label) const;
-  const RegionScore* Region(const std::string& name) const;
+  // The region's row or nullptr (label -1 = all regions). The pointer lives as long as
+  // the report, so asking a temporary report does not compile.
+  const RegionScore* Region(int label) const&;
+  const RegionScore* Region(const std::string& name) const&;
+  const RegionScore* Region(int label) const&& = delete;
+  const RegionScore* Region(const std::string& name) const&& = delete;
   // A fixed-width table in the style of a Ceres FullReport.
   std::string Table() const;
   // Machine-readable report (without the per-sample list unless asked).

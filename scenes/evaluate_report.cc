@@ -128,13 +128,13 @@ void AppendHeightsWallsSigma(const EvaluationReport& report, std::ostringstream&
 
 }  // namespace
 
-const RegionScore* EvaluationReport::Region(int label) const {
+const RegionScore* EvaluationReport::Region(int label) const& {
   for (const RegionScore& r : regions)
     if (r.label == label) return &r;
   return nullptr;
 }
 
-const RegionScore* EvaluationReport::Region(const std::string& name) const {
+const RegionScore* EvaluationReport::Region(const std::string& name) const& {
   for (const RegionScore& r : regions)
     if (r.name == name) return &r;
   return nullptr;

@@ -143,7 +143,8 @@ TEST(Walls, NormalSearchStandsTheTallBuildingsWallsUp) {
     surface.faces = r.tessellation.triangles;
     EvaluationOptions evaluation;
     evaluation.roi = roi;
-    const RegionScore* wall = Evaluate(truth, surface, evaluation).Region("wall");
+    const EvaluationReport report = Evaluate(truth, surface, evaluation);
+    const RegionScore* wall = report.Region("wall");
     if (wall != nullptr && wall->multi_view.within.size() >= 2) result.walls = wall->multi_view.within[1];
     return result;
   };
