@@ -48,6 +48,7 @@ function(facets_add_test name)
   target_compile_options(${name} PRIVATE ${FACETS_WARNINGS})
   target_compile_definitions(${name} PRIVATE
     FACETS_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+    FACETS_RENDER_CACHE_DIR="${PROJECT_BINARY_DIR}/render-cache"
     FACETS_SHARED_DATA_DIR="${PROJECT_SOURCE_DIR}/../shared/data")
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60
     PROPERTIES ENVIRONMENT "FACETS_SOURCE_DIR=${PROJECT_SOURCE_DIR}"

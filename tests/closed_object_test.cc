@@ -84,7 +84,7 @@ TEST(ClosedStart, EllipsoidFitIgnoresTheFloor) {
 
 TEST(ClosedObject, SmallObjectFromTheAutomaticClosedStart) {
   const RenderedScene rendered =
-      RenderAndRead("tests/data/closed_object_small.json", testing::TempDir() + "/facets_closed_object_small");
+      RenderAndRead("tests/data/closed_object_small.json");
   const Scene& scene = rendered.scene;
   const std::string& dir = rendered.dir;
   ImageBlock block = rendered.block;
@@ -115,7 +115,7 @@ TEST(ClosedObject, SmallObjectFromTheAutomaticClosedStart) {
 // background pixels are dropped instead of pulling the surface.
 TEST(ClosedObject, GivenStartMeshLiftedBeforeABlackBackground) {
   const RenderedScene rendered =
-      RenderAndRead("tests/data/closed_object_black.json", testing::TempDir() + "/facets_closed_object_black");
+      RenderAndRead("tests/data/closed_object_black.json");
   const Scene& scene = rendered.scene;
   const std::string& dir = rendered.dir;
   ImageBlock block = rendered.block;
@@ -125,7 +125,7 @@ TEST(ClosedObject, GivenStartMeshLiftedBeforeABlackBackground) {
   const TinMesh start = MakeEllipsoidMesh(sphere, 0.1);
   MeshData start_data;
   TinPointsAndTriangles(start, &start_data.vertices, &start_data.faces);
-  const std::string start_file = dir + "/start.ply";
+  const std::string start_file = testing::TempDir() + "/facets_closed_object_black_start.ply";
   WritePly(start_file, start_data);
 
   ReconstructionOptions options;
@@ -169,7 +169,7 @@ TEST(ClosedObject, GivenStartMeshLiftedBeforeABlackBackground) {
 // TIN self-intersects (62 crossing pairs on level 0), so that is not asserted here.
 TEST(ClosedObject, VisualHullStartBeforeABlackBackground) {
   const RenderedScene rendered =
-      RenderAndRead("tests/data/closed_object_black.json", testing::TempDir() + "/facets_closed_object_hull");
+      RenderAndRead("tests/data/closed_object_black.json");
   const Scene& scene = rendered.scene;
   const std::string& dir = rendered.dir;
   const ImageBlock& block = rendered.block;
@@ -179,7 +179,7 @@ TEST(ClosedObject, VisualHullStartBeforeABlackBackground) {
   options.start_closed = true;
   options.closed.shape = "visual-hull";
   options.closed.visual_hull.foreground.background_max = 10.0;  // black + noise 4
-  options.closed.write_start = dir + "/visual_hull_start.ply";
+  options.closed.write_start = testing::TempDir() + "/facets_closed_object_visual_hull_start.ply";
   options.break_off_gsd = 0.06;
   options.adjustment.background_below = 10.0;
   options.adjustment.robust_k = 2.0;
@@ -227,7 +227,7 @@ TEST(ClosedObject, VisualHullStartBeforeABlackBackground) {
 // more than a pixel outside the outline; 25-130 s.
 TEST(ClosedObject, SilhouetteTermHoldsTheOutlineWithoutTheHullClamp) {
   const RenderedScene rendered =
-      RenderAndRead("tests/data/closed_object_black.json", testing::TempDir() + "/facets_closed_object_silhouette");
+      RenderAndRead("tests/data/closed_object_black.json");
   const Scene& scene = rendered.scene;
   const std::string& dir = rendered.dir;
   const ImageBlock& block = rendered.block;
@@ -278,7 +278,7 @@ TEST(ClosedObject, SilhouetteTermHoldsTheOutlineWithoutTheHullClamp) {
 // pulls the roof away; with --robust 2 --reject 5 its pixels are rejected.
 double GableRmsWithSpot(bool spot, bool robust, WindowReport* report) {
   const RenderedScene rendered =
-      RenderAndRead("scenes/data/seed_gable_parallel.json", testing::TempDir() + "/facets_robust_spot_gable");
+      RenderAndRead("scenes/data/seed_gable_parallel.json");
   const Scene& scene = rendered.scene;
   ImageBlock block = rendered.block;
   block.roi.reset();

@@ -1,5 +1,5 @@
 // Test helper for the issue 6 pyramid and lifting acceptance: the pyramid scene
-// (scenes/data/pyramid_gable.json) rendered once per process (tests/rendered_scene.h), its block with the
+// (scenes/data/pyramid_gable.json) from the render cache (tests/rendered_scene.h), its block with the
 // scene's window as ROI, the true mean height and the rms of true height errors.
 #pragma once
 
@@ -22,10 +22,10 @@ struct PyramidGable {
   ImageBlock block;
   double true_mean_height = 0.0;  // of the highest surface over the ROI
 
-  explicit PyramidGable(const std::string& folder) {
+  PyramidGable() {
     const std::string file = std::string(FACETS_SOURCE_DIR) + "/scenes/data/pyramid_gable.json";
     scene = LoadScene(file);
-    dir = RenderSceneOnce(file, scene, folder);  // the first folder of this process
+    dir = RenderSceneOnce(file, scene);
     block = ReadColmapModel(dir + "/sparse", dir + "/images");
     block.roi = scene.roi;
     const TruthMesh truth = BuildTruthMesh(scene);

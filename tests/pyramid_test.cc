@@ -25,7 +25,7 @@ int FinestIterations(const Reconstruction& r) {
 }
 
 TEST(Pyramid, FiveMetresBelowConvergesOnlyWithThePyramid) {
-  const PyramidGable gable(testing::TempDir() + "/facets_pyramid_gable");
+  const PyramidGable gable;
   const double start = gable.true_mean_height - 5.0;
   const Reconstruction with = Reconstruct(gable.block, PyramidGableOptions(3, start));
   const Reconstruction without = Reconstruct(gable.block, PyramidGableOptions(1, start));

@@ -22,9 +22,9 @@ namespace {
 
 // break_off_gsd: 0 = the metre bound of AdjustmentOptions (0.01 m doubled per level), else
 // the bound in ground pixels of each level (what `facets reconstruct` uses by default).
-void ReconstructSeedGable(double break_off_gsd, const std::string& name) {
+void ReconstructSeedGable(double break_off_gsd) {
   const RenderedScene rendered =
-      RenderAndRead("scenes/data/seed_gable_parallel.json", testing::TempDir() + "/" + name);
+      RenderAndRead("scenes/data/seed_gable_parallel.json");
   const std::string& dir = rendered.dir;
   ImageBlock block = rendered.block;  // the 24 m x 24 m window; start height from the tie points
 
@@ -79,13 +79,13 @@ void ReconstructSeedGable(double break_off_gsd, const std::string& name) {
 }
 
 TEST(Reconstruct, SeedGableRoofFromTiePointsWithPyramid) {
-  ReconstructSeedGable(0.0, "facets_reconstruct_seed_gable");
+  ReconstructSeedGable(0.0);
 }
 
 // The CLI's default: 0.06 ground pixel (0.0144 m on the seeds' finest level against
 // 0.01 m) passes the same bounds.
 TEST(Reconstruct, SeedGableRoofWithTheBreakOffInGroundPixels) {
-  ReconstructSeedGable(0.06, "facets_reconstruct_seed_gable_gsd");
+  ReconstructSeedGable(0.06);
 }
 
 // ReconstructionOptions::start_step_cap_pixels (`--start-step-cap`): with the tie-point
@@ -94,7 +94,7 @@ TEST(Reconstruct, SeedGableRoofWithTheBreakOffInGroundPixels) {
 // within the cap of it, some of them on it, and without a cap some lie beyond.
 TEST(Reconstruct, CoarsestLevelStepsStayWithinTheCapOfTheTiePointStart) {
   const RenderedScene rendered =
-      RenderAndRead("scenes/data/seed_gable_parallel.json", testing::TempDir() + "/facets_reconstruct_step_cap");
+      RenderAndRead("scenes/data/seed_gable_parallel.json");
   auto coarsest_tin = [&](double cap_pixels, double* ground_pixel) {
     ReconstructionOptions options;
     options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
@@ -140,7 +140,7 @@ TEST(Reconstruct, CoarsestLevelStepsStayWithinTheCapOfTheTiePointStart) {
 // ground pixel; the finer images are not kept.
 TEST(Reconstruct, StopsAtACoarserFinestLevel) {
   const RenderedScene rendered =
-      RenderAndRead("scenes/data/seed_gable_parallel.json", testing::TempDir() + "/facets_reconstruct_finest_level");
+      RenderAndRead("scenes/data/seed_gable_parallel.json");
   ReconstructionOptions options;
   options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
   options.levels = 3;
@@ -233,8 +233,7 @@ Reconstruction ReconstructRotatedGable(const RenderedScene& rendered, int straig
 }
 
 TEST(Reconstruct, SkewRidgeIsStraightenedAndFitsWithinTheSeedRange) {
-  const RenderedScene rendered = RenderAndRead("scenes/data/seed_gable_rotated_patch.json",
-                                               testing::TempDir() + "/facets_reconstruct_skew_ridge");
+  const RenderedScene rendered = RenderAndRead("scenes/data/seed_gable_rotated_patch.json");
   const Reconstruction with = ReconstructRotatedGable(rendered, ReconstructionOptions().straighten_rounds);
   const Reconstruction without = ReconstructRotatedGable(rendered, 0);
   int kept = 0, moved = 0;

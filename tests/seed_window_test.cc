@@ -80,15 +80,10 @@ void AddCorrelatedNoise(double sigma, unsigned seed, ImagePlanes* planes) {
 SeedResult RunSeedWindow(const SeedRun& run) {
   const std::string scene_file = run.scene_file[0] == '/' ? run.scene_file : std::string(FACETS_SOURCE_DIR) + "/scenes/data/" + run.scene_file;
   const Scene scene = LoadScene(scene_file);
-  // One folder per test: ctest runs tests in parallel, and rendering replaces the folder.
-  // A scene and noise this process rendered before are not rendered again.
+  // The render of this scene and noise, shared through the test binary's render cache.
   RenderOptions render_options;
   render_options.noise_sigma = run.correlated_noise > 0.0 ? 0.0 : run.noise;
-  const std::string dir = RenderSceneOnce(
-      scene_file, scene,
-      testing::TempDir() + "/facets_" + testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
-          scene.name + "_" + std::to_string(static_cast<int>(run.noise * 10)),
-      render_options);
+  const std::string dir = RenderSceneOnce(scene_file, scene, render_options);
 
   const ImageBlock block = ReadColmapModel(dir + "/sparse", dir + "/images");
   LoadedImages loaded;

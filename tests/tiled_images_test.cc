@@ -16,7 +16,7 @@ namespace {
 
 TEST(TiledImages, SameSurfaceAsImagesInMemory) {
   const RenderedScene rendered =
-      RenderAndRead("scenes/data/seed_gable_parallel.json", testing::TempDir() + "/facets_tiled_images_seed_gable");
+      RenderAndRead("scenes/data/seed_gable_parallel.json");
   ImageBlock block = rendered.block;
   ReconstructionOptions options;
   options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions

@@ -26,7 +26,7 @@ double Median(std::vector<double> v) {
 }
 
 TEST(Walls, BlockBuildingIsValidAndFlagsTheWallOneImageSees) {
-  const RenderedScene scene = RenderAndRead("scenes/data/block.json", testing::TempDir() + "/facets_walls_block");
+  const RenderedScene scene = RenderAndRead("scenes/data/block.json");
   // The aerial path (wall searches, V-cycle, corners, feet and eaves) on two levels.
   ReconstructionOptions options;
   ApplyScenePreset(ScenePreset::kAerial, &options);
@@ -113,7 +113,7 @@ TEST(Walls, BlockBuildingIsValidAndFlagsTheWallOneImageSees) {
 // gain shrank to +2 points because the run without them improved, so the rounds are held to an
 // absolute bound and to not losing walls rather than to a fixed gain.
 TEST(Walls, NormalSearchStandsTheTallBuildingsWallsUp) {
-  const RenderedScene scene = RenderAndRead("scenes/data/block.json", testing::TempDir() + "/facets_walls_tall");
+  const RenderedScene scene = RenderAndRead("scenes/data/block.json");
   RegionOfInterest roi;
   roi.min = Eigen::Vector3d(-30, -30, -3);
   roi.max = Eigen::Vector3d(-2, -6, 20);

@@ -31,19 +31,18 @@ struct Compared {
   double rms_one = 0.0, rms_windows = 0.0;     // true height errors (m)
 };
 
-// The windows test scene (seed gable pair, noise 4) rendered into `name` (or the folder
-// this process rendered it into before: tests/rendered_scene.h), its images
-// loaded, and a start surface 0.3 m below the truth with 2 m triangles (4x4 facets of
+// The windows test scene (seed gable pair, noise 4) from the render cache
+// (tests/rendered_scene.h), its images loaded, and a start surface 0.3 m below the truth with 2 m triangles (4x4 facets of
 // 0.5 m: about 2x2 pixels, seed 000). Built in place: the renderer keeps references.
 struct WindowsGable {
-  explicit WindowsGable(const std::string& name)
+  WindowsGable()
       : scene(LoadScene(std::string(FACETS_SOURCE_DIR) + "/tests/data/windows_gable.json")),
         truth(BuildTruthMesh(scene)),
         renderer(scene, truth) {
     RenderOptions render_options;
     render_options.noise_sigma = 4.0;
-    const std::string dir = RenderSceneOnce(std::string(FACETS_SOURCE_DIR) + "/tests/data/windows_gable.json",
-                                            scene, testing::TempDir() + "/" + name, render_options);
+    const std::string dir =
+        RenderSceneOnce(std::string(FACETS_SOURCE_DIR) + "/tests/data/windows_gable.json", scene, render_options);
     block = ReadColmapModel(dir + "/sparse", dir + "/images");
     LoadLevelImages(block, /*grey=*/true, &loaded);  // keeps pointers to block's cameras
     start = StartBelowTruth(scene, renderer, 2.0, 0.3);
@@ -57,7 +56,7 @@ struct WindowsGable {
 };
 
 TEST(Windows, ManyWindowsMatchOneWindowWithinSigma) {
-  const WindowsGable gable("facets_windows_seed_gable");
+  const WindowsGable gable;
   const LoadedImages& loaded = gable.loaded;
   const TinMesh& start = gable.start;
   auto truth_z = [&](double x, double y) { return TruthHeight(gable.renderer, x, y); };
@@ -135,7 +134,7 @@ TEST(Windows, ManyWindowsMatchOneWindowWithinSigma) {
 // every vertex of a subset face is owned once, no other vertex at all; the whole face
 // set gives PartitionIntoWindows' windows. FacesNearVertices grows by whole edge rings.
 TEST(Windows, PartitionOfAFaceSubsetCoversItOnce) {
-  const WindowsGable gable("facets_windows_subset");
+  const WindowsGable gable;
   const TinMesh& mesh = gable.start;
   WindowPartitionOptions partition;
   partition.max_faces = 100;
@@ -194,7 +193,7 @@ TEST(Windows, PartitionOfAFaceSubsetCoversItOnce) {
 // position and its per-vertex values to the bit; the local windows' sigma0 comes back to
 // its value before the push, and the level's pooled sigma0 stays.
 TEST(Windows, ALocalReadjustmentBringsBackAPushedPatchAndLeavesTheRestAlone) {
-  const WindowsGable gable("facets_windows_local");
+  const WindowsGable gable;
   AdjustmentOptions adjustment;
   adjustment.crease_angle_deg = 15.0;  // as in ManyWindowsMatchOneWindowWithinSigma
   adjustment.break_off = 0.002;
@@ -293,7 +292,7 @@ TEST(Windows, ALocalReadjustmentBringsBackAPushedPatchAndLeavesTheRestAlone) {
 // thread and with two (windows of a group in parallel, pixel casting and the normal
 // equations' sums in parallel), and twice with two.
 TEST(Windows, SameSurfaceToTheBitWithOneAndTwoThreads) {
-  const WindowsGable gable("facets_windows_threads");
+  const WindowsGable gable;
   const LoadedImages& loaded = gable.loaded;
   const TinMesh& start = gable.start;
 

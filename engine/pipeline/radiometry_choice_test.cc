@@ -34,13 +34,15 @@ TEST(RadiometryChoice, NoObservationsGiveNone) {
 // A rendered pair has one exposure: no radiometric model. One image's grey values
 // scaled by 1.3 and written back make the gains differ: linear.
 TEST(RadiometryChoice, RenderedPairNoneAndScaledImageLinear) {
-  const std::string dir = TempDir("gable");
-  RenderedScene rendered = RenderAndRead("scenes/data/seed_gable_parallel.json", dir);
+  RenderedScene rendered = RenderAndRead("scenes/data/seed_gable_parallel.json");
   const RadiometryChoice consistent = ChooseRadiometry(rendered.block);
   std::printf("rendered pair: %s\n", consistent.why.c_str());
   EXPECT_EQ(consistent.model, RadiometricModel::kNone) << consistent.why;
   EXPECT_EQ(consistent.images_fitted, 2);
 
+  // The cached render is shared: the scaled image goes into a private copy.
+  const std::string dir = CopyRender(rendered.dir, TempDir("gable"));
+  rendered.block = ReadColmapModel(dir + "/sparse", dir + "/images");
   const std::string path = rendered.block.images[1].path;
   ImagePlanes image = ReadImage(path);
   for (float& g : image.data) g *= 1.3f;

@@ -39,13 +39,10 @@ TEST(ScenePreset, AerialSetsTheWallBundleOverTheDefaults) {
 // The seed's nadir stereo pair: both images look straight down with the same heading, so
 // their mean up is a horizontal direction; the choice must still be aerial.
 TEST(ScenePreset, RenderedNadirPairIsAerial) {
-  const std::string dir = (fs::temp_directory_path() / ("facets_scene_preset_" + std::to_string(getpid()))).string();
-  const RenderedScene rendered =
-      RenderAndRead("scenes/data/seed_gable_parallel.json", dir);
+  const RenderedScene rendered = RenderAndRead("scenes/data/seed_gable_parallel.json");
   std::string why;
   EXPECT_EQ(ChooseScenePreset(rendered.block, &why), ScenePreset::kAerial) << why;
   std::printf("seed pair: %s\n", why.c_str());
-  fs::remove_all(dir);
 }
 
 struct RealSet {
