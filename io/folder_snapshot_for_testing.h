@@ -22,7 +22,7 @@ inline std::map<std::string, std::string> FolderSnapshot(const std::filesystem::
   std::map<std::string, std::string> files;
   if (!fs::exists(dir)) return files;
   for (const auto& entry : fs::recursive_directory_iterator(dir)) {
-    const std::string name = fs::relative(entry.path(), dir).string();
+    const std::string name = entry.path().lexically_relative(dir).string();
     if (entry.is_symlink()) {
       files[name] = "->" + fs::read_symlink(entry.path()).string();
     } else if (entry.is_regular_file()) {
