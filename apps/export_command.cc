@@ -9,6 +9,8 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "apps/stop_on_signal.h"
+#include "io/output_folder.h"
 #include "io/ply_io.h"
 
 namespace facets {
@@ -85,7 +87,21 @@ std::vector<std::string> RunExport(const ExportArgs& args) {
     throw std::runtime_error(surface_path.string() +
                              ": has no sigma per vertex (leave sigma out of --formats)");
   }
-  return WriteSurfaceProducts(surface, args.out, options);
+  for (const std::string& stale : RemoveStaleTemporaryFolders(args.out)) {
+    std::cout << "facets export: removed " << stale << " (left by a run that was killed)\n";
+  }
+  OutputFolder output(args.out, OutputFolder::Start::kPreviousFiles);
+  StopOnSignal stop([&output](const std::string& signal) {
+    output.Abandon();
+    std::cerr << "facets export: stopped by " << signal << "; " << output.out() << " is unchanged\n";
+  });
+  try {
+    const std::vector<std::string> written = WriteSurfaceProducts(surface, output.path(), options);
+    stop.Finish([&output] { output.Commit(); });
+    return written;
+  } catch (const std::exception& e) {
+    throw std::runtime_error(output.InFinalNames(e.what()));
+  }
 }
 
 void AddExportCommand(CLI::App& app) {
@@ -106,7 +122,8 @@ void AddExportCommand(CLI::App& app) {
       for (const auto& f : files) list += " " + f;
       std::cout << "facets export: written into " << args->out << ":" << list << "\n";
     } catch (const std::exception& e) {
-      std::cerr << "facets export: error: " << e.what() << "\n";
+      std::cerr << "facets export: error: " << e.what() << "\nfacets export: " << args->out
+                << " is unchanged\n";
       throw CLI::RuntimeError(1);
     }
   });

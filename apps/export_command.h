@@ -24,7 +24,10 @@ struct ExportArgs {
 };
 
 // Reads the run folder (throws std::runtime_error naming the folder or file and what is
-// missing or wrong), writes the products into args.out, returns the file names.
+// missing or wrong), writes the products into args.out, returns the file names. The
+// products go into a temporary copy of args.out that replaces it only when all are
+// written (io/output_folder.h): a failure, SIGINT or SIGTERM leaves args.out, which may
+// be the run folder itself, as it was.
 std::vector<std::string> RunExport(const ExportArgs& args);
 
 void AddExportCommand(CLI::App& app);

@@ -10,6 +10,7 @@
 #include <functional>
 #include <iostream>
 #include <memory>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -20,8 +21,10 @@
 #include "engine/pipeline/reconstruction.h"
 #include "engine/pipeline/radiometry_choice.h"
 #include "engine/pipeline/scene_preset.h"
+#include "apps/stop_on_signal.h"
 #include "io/atomic_file.h"
 #include "io/colmap_io.h"
+#include "io/output_folder.h"
 #include "io/ply_io.h"
 #include "io/project_io.h"
 #include "mesh/closed_surface.h"
@@ -30,6 +33,24 @@ namespace facets {
 namespace {
 
 using Say = std::function<void(const std::string&)>;
+
+// The run's log (facets.log, or <out>.failed.log): lines said by the run, read by a
+// signal watcher thread too.
+class RunLog {
+ public:
+  void Add(const std::string& line) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    text_ += line + "\n";
+  }
+  std::string Text() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return text_;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::string text_;
+};
 
 ImageBlock ReadBlock(const ReconstructAppSettings& app, const Say& say) {
   ImageBlock block;
@@ -80,8 +101,8 @@ void ChooseOptions(const ImageBlock& block, ReconstructCommandLine* line, const 
 
 // Level images in memory while they fit the budget, else tiled on disk and read per
 // window (pyramid: 4/3 of the finest kept level; float per channel).
-void PlaceLevelImages(const ImageBlock& block, const ReconstructAppSettings& app, ReconstructionOptions* options,
-                      const Say& say) {
+void PlaceLevelImages(const ImageBlock& block, const ReconstructAppSettings& app, const std::string& dir,
+                      ReconstructionOptions* options, const Say& say) {
   double pyramid_mb = 0.0;
   for (const auto& image : block.images) {
     const Camera& camera = block.CameraOf(image);
@@ -89,7 +110,7 @@ void PlaceLevelImages(const ImageBlock& block, const ReconstructAppSettings& app
                   (options->colour ? 3 : 1) * 4.0 / (1024.0 * 1024.0);
   }
   if (app.tiled_images || pyramid_mb > app.image_memory_mb) {
-    options->image_cache_dir = (std::filesystem::path(app.out) / ".image-cache").string();
+    options->image_cache_dir = (std::filesystem::path(dir) / ".image-cache").string();
     options->image_cache_mb = std::max(64.0, 0.5 * app.image_memory_mb);
     say("level images: " + std::to_string(static_cast<int>(pyramid_mb)) + " MB, read per window from tiled files");
   }
@@ -99,11 +120,9 @@ void PlaceLevelImages(const ImageBlock& block, const ReconstructAppSettings& app
 // starts from (to replay that step without images: `facets creases`).
 void KeepLevels(const std::string& out, ReconstructionOptions* options) {
   const std::filesystem::path dir = std::filesystem::path(out) / "levels";
-  std::filesystem::create_directories(dir);
+  std::filesystem::create_directory(dir);
   auto keep = [dir](const std::string& name, const TinMesh& mesh) {
-    const std::string path = (dir / name).string();
-    WritePly(path + ".tmp", TinGeometryData(mesh));
-    CommitTemporary(path + ".tmp", path);
+    WritePly((dir / name).string(), TinGeometryData(mesh));
   };
   options->level_done = [keep](int level, const TinMesh& mesh) {
     keep("level_" + std::to_string(level) + ".ply", mesh);
@@ -113,12 +132,13 @@ void KeepLevels(const std::string& out, ReconstructionOptions* options) {
   };
 }
 
-// The run's options beyond the bound ones: region, image placement, progress, outputs.
-void PrepareRun(const ImageBlock& block, ReconstructCommandLine* line, const Say& say) {
+// The run's options beyond the bound ones: region, image placement, progress, outputs
+// (into dir, the run's temporary output folder).
+void PrepareRun(const ImageBlock& block, const std::string& dir, ReconstructCommandLine* line, const Say& say) {
   const ReconstructAppSettings& app = line->app;
   ReconstructionOptions& options = line->options;
-  options.closed.write_start = (std::filesystem::path(app.out) / "start.ply").string();
-  PlaceLevelImages(block, app, &options, say);
+  options.closed.write_start = (std::filesystem::path(dir) / "start.ply").string();
+  PlaceLevelImages(block, app, dir, &options, say);
   if (!app.roi.empty()) {
     if (app.roi.size() != 6) throw std::invalid_argument("--roi takes 6 numbers: xmin ymin zmin xmax ymax zmax");
     RegionOfInterest roi;
@@ -127,13 +147,12 @@ void PrepareRun(const ImageBlock& block, ReconstructCommandLine* line, const Say
     options.roi = roi;
   }
   options.progress = say;
-  if (app.keep_levels) KeepLevels(app.out, &options);
+  if (app.keep_levels) KeepLevels(dir, &options);
 }
 
-// Products (each written to a temporary name and renamed: io/atomic_file.h) and the
-// closing lines of the log.
+// Products into dir (the run's temporary output folder) and the closing lines of the log.
 void WriteRunProducts(const Reconstruction& result, const ImageBlock& block, const ReconstructCommandLine& line,
-                      std::chrono::steady_clock::time_point start, const Say& say) {
+                      const std::string& dir, std::chrono::steady_clock::time_point start, const Say& say) {
   const ReconstructAppSettings& app = line.app;
   say("stage products: writing into " + app.out);
   ProductOptions products;
@@ -142,7 +161,7 @@ void WriteRunProducts(const Reconstruction& result, const ImageBlock& block, con
   products.ortho = products.dsm = products.sigma = app.rasters;
   products.preview = app.preview;
   std::string list;
-  for (const auto& file : WriteProducts(result, block, app.out, products)) list += " " + file;
+  for (const auto& file : WriteProducts(result, block, dir, products)) list += " " + file;
   say("  written:" + list);
   if (line.options.start_closed || !line.options.closed.mesh_file.empty()) {
     // A closed start must come out closed and without self-intersections.
@@ -165,28 +184,70 @@ void WriteRunProducts(const Reconstruction& result, const ImageBlock& block, con
       std::to_string(finest.sigma0) + " grey values, " + std::to_string(seconds) + " s; products in " + app.out);
 }
 
-void RunReconstruct(const CLI::App& sub, ReconstructCommandLine* line) {
+// A failed or stopped run: the log beside the output folder (<out>.failed.log) and a
+// message saying that the previous output is unchanged.
+void ReportFailure(const std::string& out, const RunLog& log, const std::string& what) {
+  const std::string log_path = out + ".failed.log";
+  std::string where = "log: " + log_path;
+  try {
+    WriteFileAtomically(log_path, log.Text() + "error: " + what + "\n");
+  } catch (const std::exception& e) {
+    where = "no log written: " + std::string(e.what());
+  }
+  std::cerr << "facets reconstruct: error: " << what << "\nfacets reconstruct: " << out
+            << " is unchanged (a previous output there stays whole); " << where << "\n";
+}
+
+// The run itself, writing into output.path().
+void RunInto(const CLI::App& sub, ReconstructCommandLine* line, const std::string& dir, const Say& say) {
   const auto start = std::chrono::steady_clock::now();
   const ReconstructAppSettings& app = line->app;
-  std::filesystem::create_directories(app.out);
-  std::ostringstream log;
-  const Say say = [&log](const std::string& text) {
-    std::cout << text << "\n" << std::flush;
-    log << text << "\n";
-  };
   std::unique_ptr<tbb::global_control> threads;
   if (app.threads > 0) {
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, app.threads);
   }
   const ImageBlock block = ReadBlock(app, say);
   ChooseOptions(block, line, say);
-  const std::string settings = SettingsFile(sub);
-  PrepareRun(block, line, say);
+  WriteFileAtomically((std::filesystem::path(dir) / "settings.ini").string(), SettingsFile(sub));
+  PrepareRun(block, dir, line, say);
   const Reconstruction result = Reconstruct(block, line->options);
-  WriteRunProducts(result, block, *line, start, say);
-  const std::filesystem::path out(app.out);
-  WriteFileAtomically((out / "settings.ini").string(), settings);
-  WriteFileAtomically((out / "facets.log").string(), log.str());
+  WriteRunProducts(result, block, *line, dir, start, say);
+}
+
+// Everything goes into a temporary folder that replaces --out only when complete
+// (io/output_folder.h); a failure or SIGINT/SIGTERM leaves --out as it was.
+void RunReconstruct(const CLI::App& sub, ReconstructCommandLine* line) {
+  RunLog log;
+  const Say say = [&log](const std::string& text) {
+    std::cout << text << "\n" << std::flush;
+    log.Add(text);
+  };
+  const std::string& out_arg = line->app.out;
+  CheckReplaceable(out_arg, {"facets.log", "report.json", "settings.ini"});
+  for (const std::string& stale : RemoveStaleTemporaryFolders(out_arg)) {
+    say("removed " + stale + " (left by a run that was killed)");
+  }
+  OutputFolder output(out_arg, OutputFolder::Start::kEmpty);
+  const std::string out = output.out();
+  StopOnSignal stop([&](const std::string& signal) {
+    output.Abandon();
+    ReportFailure(out, log, "stopped by " + signal);
+  });
+  try {
+    RunInto(sub, line, output.path(), say);
+    stop.Finish([&] {
+      WriteFileAtomically((std::filesystem::path(output.path()) / "facets.log").string(), log.Text());
+      output.Commit();
+      std::error_code ignored;
+      std::filesystem::remove(out + ".failed.log", ignored);
+    });
+  } catch (const std::exception& e) {
+    stop.Finish([&] {
+      output.Abandon();
+      ReportFailure(out, log, output.InFinalNames(e.what()));
+    });
+    throw CLI::RuntimeError(1);
+  }
 }
 
 }  // namespace
@@ -201,6 +262,8 @@ void AddReconstructCommand(CLI::App& app) {
   sub->callback([line, sub] {
     try {
       RunReconstruct(*sub, line.get());
+    } catch (const CLI::Error&) {
+      throw;  // reported already
     } catch (const std::exception& e) {
       std::cerr << "facets reconstruct: error: " << e.what() << "\n";
       throw CLI::RuntimeError(1);

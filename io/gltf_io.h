@@ -58,8 +58,8 @@ struct GlbOptions {
 
 // Throws std::invalid_argument (message starts with path) when the surface fails
 // ExportSurface::Check, has no triangles, or options are invalid;
-// std::runtime_error naming the file when it cannot be written. Writes path + ".tmp"
-// and renames at the end.
+// std::runtime_error naming the file when it cannot be written. Writes a unique temporary
+// beside path and renames it at the end (io/atomic_file.h).
 void WriteGlb(const std::string& path, const ExportSurface& surface, const GlbOptions& = {});
 
 // The .glb file content in memory (what WriteGlb writes). `what` prefixes messages.

@@ -19,8 +19,11 @@ void WriteTiledFloatImage(const std::string& path, const ImagePlanes& image) {
   spec.tile_width = 64;
   spec.tile_height = 64;
   spec.attribute("compression", "none");  // read back many times, written once
-  const std::string tmp = path + ".tmp";
-  if (!out->open(tmp, spec)) throw std::runtime_error(path + ": " + out->geterror());
+  const std::string tmp = CreateTemporaryBeside(path);
+  if (!out->open(tmp, spec)) {
+    RemoveTemporary(tmp);
+    throw std::runtime_error(path + ": " + out->geterror());
+  }
   // Plane-major memory to the file's interleaved channels (a level image is small
   // against the original, one interleaved copy is fine).
   const size_t plane = static_cast<size_t>(image.width) * image.height;
@@ -30,7 +33,7 @@ void WriteTiledFloatImage(const std::string& path, const ImagePlanes& image) {
   }
   if (!out->write_image(OIIO::TypeDesc::FLOAT, interleaved.data()) || !out->close()) {
     const std::string error = out->geterror();
-    std::remove(tmp.c_str());
+    RemoveTemporary(tmp);
     throw std::runtime_error(path + ": cannot write: " + error);
   }
   CommitTemporary(tmp, path);

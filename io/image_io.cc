@@ -149,7 +149,8 @@ void WriteImage(const std::string& path, const ImagePlanes& image, int bits) {
     throw std::invalid_argument(path + ": 32-bit float images need .tif, .tiff or .exr");
   }
   if (bits == 16 && is_jpeg) throw std::invalid_argument(path + ": JPEG cannot store 16 bits");
-  // The format comes from the final name; the pixels go to path + ".tmp" first.
+  // The format comes from the final name; the pixels go to a unique temporary beside it
+  // first (io/atomic_file.h).
   auto out = OIIO::ImageOutput::create(path);
   if (!out) throw std::runtime_error(path + ": no writer for this format: " + OIIO::geterror());
   const OIIO::TypeDesc type = bits == 8    ? OIIO::TypeDesc::UINT8
@@ -157,8 +158,9 @@ void WriteImage(const std::string& path, const ImagePlanes& image, int bits) {
                                            : OIIO::TypeDesc::FLOAT;
   OIIO::ImageSpec spec(image.width, image.height, image.channels, type);
   if (is_jpeg) spec.attribute("CompressionQuality", 95);
-  const std::string tmp = path + ".tmp";
+  const std::string tmp = CreateTemporaryBeside(path);
   if (!out->open(tmp, spec)) {
+    RemoveTemporary(tmp);
     throw std::runtime_error(path + ": cannot open for writing: " + out->geterror());
   }
   bool ok = false;
@@ -179,8 +181,7 @@ void WriteImage(const std::string& path, const ImagePlanes& image, int bits) {
   const std::string write_error = ok ? "" : out->geterror();
   const bool closed = out->close();
   if (!ok || !closed) {
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
+    RemoveTemporary(tmp);
     throw std::runtime_error(path + ": write failed: " + write_error + out->geterror());
   }
   CommitTemporary(tmp, path);

@@ -53,7 +53,7 @@ MeshData ReadPly(std::istream& in, const std::string& source_name = "<stream>");
 // int views, face: list uchar int vertex_indices + int label. Optional attributes are
 // written only when present; the origin (when not zero, exact decimals) and the crs
 // (when given) as header comments. Colours are rounded and clamped to 0..255. Writes to
-// path + ".tmp" and renames at the end: never a half-written file.
+// a unique temporary beside path and renames it at the end: never a half-written file.
 void WritePly(const std::string& path, const MeshData& mesh);
 
 // Wavefront OBJ: "v x y z" and "f a b c ..." lines (1-based or negative relative

@@ -236,7 +236,7 @@ void WritePreview(const std::string& path, const ExportSurface& surface,
   for (size_t i = 0; i < plane; ++i) {
     for (int c = 0; c < 3; ++c) planes.data[c * plane + i] = image.rgb[i * 3 + c];
   }
-  WriteImage(path, planes, 8);  // OpenImageIO, path.tmp + rename
+  WriteImage(path, planes, 8);  // OpenImageIO, a unique temporary + rename
 }
 
 }  // namespace facets

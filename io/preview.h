@@ -77,7 +77,7 @@ PreviewFrame ChoosePreviewFrame(const ExportSurface& surface, const PreviewOptio
 PreviewImage RenderPreview(const ExportSurface& surface, const PreviewOptions& options = {},
                            const std::string& what = "<preview>");
 
-// RenderPreview written as an 8-bit RGB PNG (via path.tmp and a rename). Throws
+// RenderPreview written as an 8-bit RGB PNG (via a unique temporary and a rename). Throws
 // std::runtime_error naming the file when it cannot be written.
 void WritePreview(const std::string& path, const ExportSurface& surface,
                   const PreviewOptions& options = {});

@@ -286,12 +286,14 @@ void WriteGeoTiff(const std::string& path, const Raster& raster, const GeoRefere
   CPLStringList create_options;
   SetCreateOptions(raster, options, &create_options);
 
-  const std::string tmp = path + ".tmp";
+  const std::string tmp = CreateTemporaryBeside(path);
   const std::string tmp_aux = tmp + ".aux.xml";
-  RemoveQuietly(tmp_aux);
   GDALDataset* ds = driver->Create(tmp.c_str(), grid.width, grid.height, raster.bands,
                                    GdalType(raster.type), create_options.List());
-  if (!ds) throw std::runtime_error(path + ": cannot create '" + tmp + "'" + GdalMessage());
+  if (!ds) {
+    RemoveQuietly(tmp);
+    throw std::runtime_error(path + ": cannot create '" + tmp + "'" + GdalMessage());
+  }
   std::string error = WriteDatasetContents(ds, raster, geo, &srs);
   // GDAL 3.6's GDALClose returns nothing: a failure while flushing (disk full) shows
   // only as a CE_Failure in the error state.

@@ -85,7 +85,8 @@ struct RasterWriteOptions {
 // the CRS and the geotransform. Without one: the TIFF has no geokeys and a world file
 // next to it (path with the extension replaced by ".tfw": pixel size, 0, 0, -pixel
 // size, global X and Y of the centre of the top-left pixel) holds the georeferencing.
-// Every file is written to "<name>.tmp" first and renamed at the end. Throws
+// Every file is written to a unique temporary name first and renamed at the end
+// (io/atomic_file.h). Throws
 // std::runtime_error / std::invalid_argument naming the file on a bad raster, an
 // unknown CRS or a failed write.
 void WriteGeoTiff(const std::string& path, const Raster& raster, const GeoReference& geo,

@@ -14,14 +14,11 @@
 #include <sstream>
 #include <string>
 
+#include "io/folder_snapshot_for_testing.h"
+
 namespace facets {
 namespace {
 namespace fs = std::filesystem;
-
-std::string FileText(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
 
 // Runs the facets CLI with `args`; returns the exit status, stdout in *out and stderr in
 // *err (files per process: ctest -j runs tests side by side).

@@ -1,0 +1,75 @@
+#include "apps/stop_on_signal.h"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <iostream>
+#include <stdexcept>
+
+namespace facets {
+namespace {
+
+// The write end of the one active watcher's pipe (one command per process).
+volatile sig_atomic_t g_pipe_write = -1;
+struct sigaction g_previous_int {}, g_previous_term {};
+
+void OnSignal(int signal_number) {
+  const int saved = errno;
+  const unsigned char byte = static_cast<unsigned char>(signal_number);
+  if (g_pipe_write >= 0) {
+    [[maybe_unused]] const ssize_t ignored = ::write(g_pipe_write, &byte, 1);
+  }
+  errno = saved;
+}
+
+}  // namespace
+
+StopOnSignal::StopOnSignal(std::function<void(const std::string&)> on_stop) : on_stop_(std::move(on_stop)) {
+  if (::pipe2(pipe_, O_CLOEXEC) != 0) throw std::runtime_error("cannot make the signal pipe");
+  g_pipe_write = pipe_[1];
+  watcher_ = std::thread([this] { Watch(); });
+  struct sigaction action {};
+  action.sa_handler = OnSignal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESTART;
+  ::sigaction(SIGINT, &action, &g_previous_int);
+  ::sigaction(SIGTERM, &action, &g_previous_term);
+}
+
+StopOnSignal::~StopOnSignal() {
+  ::sigaction(SIGINT, &g_previous_int, nullptr);
+  ::sigaction(SIGTERM, &g_previous_term, nullptr);
+  const unsigned char stop = 0;
+  [[maybe_unused]] const ssize_t ignored = ::write(pipe_[1], &stop, 1);
+  watcher_.join();
+  g_pipe_write = -1;
+  ::close(pipe_[0]);
+  ::close(pipe_[1]);
+}
+
+void StopOnSignal::Finish(const std::function<void()>& finish) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  finished_ = true;
+  finish();
+}
+
+void StopOnSignal::Watch() {
+  for (;;) {
+    unsigned char byte = 0;
+    const ssize_t got = ::read(pipe_[0], &byte, 1);
+    if (got < 0 && errno == EINTR) continue;
+    if (got <= 0 || byte == 0) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (finished_) continue;
+    const int signal_number = byte;
+    on_stop_(signal_number == SIGINT ? "SIGINT" : signal_number == SIGTERM ? "SIGTERM" : "signal " + std::to_string(signal_number));
+    std::cout.flush();
+    std::cerr.flush();
+    std::_Exit(128 + signal_number);
+  }
+}
+
+}  // namespace facets
