@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "apps/option_binder.h"
 #include "apps/reconstruct_options.h"
 #include "engine/pipeline/products.h"
 #include "engine/pipeline/reconstruction.h"
@@ -120,10 +121,9 @@ void PrepareRun(const ImageBlock& block, ReconstructCommandLine* line, const Say
   options.closed.write_start = (std::filesystem::path(app.out) / "start.ply").string();
   PlaceLevelImages(block, app, &options, say);
   if (!app.roi.empty()) {
-    if (app.roi.size() != 6) throw std::invalid_argument("--roi takes 6 numbers: xmin ymin zmin xmax ymax zmax");
-    RegionOfInterest roi;
-    roi.min = Eigen::Vector3d(app.roi[0], app.roi[1], app.roi[2]) - block.origin;
-    roi.max = Eigen::Vector3d(app.roi[3], app.roi[4], app.roi[5]) - block.origin;
+    RegionOfInterest roi = RegionFromNumbers(app.roi, "--roi");
+    roi.min -= block.origin;
+    roi.max -= block.origin;
     options.roi = roi;
   }
   options.progress = say;
@@ -168,6 +168,7 @@ void WriteRunProducts(const Reconstruction& result, const ImageBlock& block, con
 void RunReconstruct(const CLI::App& sub, ReconstructCommandLine* line) {
   const auto start = std::chrono::steady_clock::now();
   const ReconstructAppSettings& app = line->app;
+  if (!app.roi.empty()) RegionFromNumbers(app.roi, "--roi");  // before anything is read or written
   std::filesystem::create_directories(app.out);
   std::ostringstream log;
   const Say say = [&log](const std::string& text) {
