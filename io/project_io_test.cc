@@ -306,7 +306,7 @@ TEST(ProjectIoTest, ErrorsNameFileAndJsonPath) {
   EXPECT_NE(ErrorOfProject(Replace(good, "\"id\": 2,", "\"id\": 1,")).find("duplicates image id 1"),
             std::string::npos);
   EXPECT_NE(ErrorOfProject(Replace(good, "\"max\": [1400, 2100, 100]", "\"max\": [1400, 2100, -1]"))
-                .find("region_of_interest has min Z > max Z (100.000000 > -1.000000)"),
+                .find("region_of_interest has min Z > max Z (0.000000 > -1.000000)"),
             std::string::npos);
   EXPECT_NE(ErrorOfProject(good.substr(0, good.size() / 2)).find("not valid JSON"),
             std::string::npos);
