@@ -9,6 +9,7 @@
 
 #include "engine/pipeline/products.h"
 #include "io/ply_io.h"
+#include "mesh/closed_surface.h"
 #include "mesh/surface_validity.h"
 #include "mesh/tin.h"
 
@@ -24,7 +25,9 @@ CreasesSummary RunCreases(const CreasesArgs& args, std::ostream& log) {
     throw std::invalid_argument("nothing to lay: all three kinds left out");
   }
   options.Check();
-  TinMesh mesh = LoadStartMesh(args.tin);
+  // Facets' own readers (io/ply_io.h): they check the file before trusting its counts.
+  const MeshData tin = ReadMesh(args.tin);
+  TinMesh mesh = TinFromTriangles(tin.vertices, tin.faces, args.tin);
   WallCornerSearch search = FindWallCorners(mesh, options);
   // The engine's order: vertical corners first (their bands end short of feet and eaves).
   std::stable_sort(search.corners.begin(), search.corners.end(),

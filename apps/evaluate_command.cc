@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "apps/option_binder.h"
 #include "io/atomic_file.h"
 #include "io/colmap_io.h"
 #include "io/ply_io.h"
@@ -52,6 +53,7 @@ void RunSilhouette(const EvaluateArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   MeshData mesh = ReadMesh(args.mesh);
   mesh.Check(args.mesh);
+  if (mesh.faces.empty()) throw std::runtime_error(args.mesh + ": has no faces: no silhouette to compare");
   // The mesh is in the block's local frame when both share the origin; a mesh written
   // with another origin is moved into the block's frame.
   const Eigen::Vector3d shift = mesh.origin - block.origin;
@@ -83,12 +85,7 @@ void RunEvaluate(const EvaluateArgs& args) {
   if (!args.roi.empty()) {
     // A reconstruction of part of the scene is scored on that part only: truth outside
     // it would count as missing.
-    RegionOfInterest roi;
-    roi.min = Eigen::Vector3d(args.roi[0], args.roi[1], args.roi[2]);
-    roi.max = Eigen::Vector3d(args.roi[3], args.roi[4], args.roi[5]);
-    if (!(roi.max.array() > roi.min.array()).all()) {
-      throw std::invalid_argument("--roi: every max must exceed its min");
-    }
+    const RegionOfInterest roi = RegionFromNumbers(args.roi, "--roi");
     options.roi = roi;
   }
   const auto start = std::chrono::steady_clock::now();

@@ -5,6 +5,7 @@
 
 #include "apps/creases_command.h"
 #include "apps/evaluate_command.h"
+#include "apps/option_binder.h"
 #include "apps/export_command.h"
 #include "apps/reconstruct_command.h"
 #include "apps/render_command.h"
@@ -17,7 +18,8 @@ int main(int argc, char** argv) {
   // named after the subcommand, as the settings.ini a reconstruction writes; unknown
   // keys are errors, not silently dropped; options on the command line win.
   app.set_config("--config", "", "config file: `option = value` lines in a [reconstruct] section (the settings.ini "
-                                 "each run writes); options on the command line win");
+                                 "each run writes); options on the command line win")
+      ->check(CLI::ExistingFile);  // a missing file or a folder named as such
   app.allow_config_extras(CLI::config_extras_mode::error);
   // Before the subcommands: they inherit it (`facets reconstruct --help-all` lists the
   // expert options too).
@@ -31,12 +33,8 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ConfigError& e) {
-    // CLI11 names the key ("INI was not able to parse reconstruct.levles"); add the file.
     const std::vector<std::string> files = app.get_config_ptr()->results();
-    std::string message = e.what();
-    const std::string unknown = "INI was not able to parse ";
-    if (message.rfind(unknown, 0) == 0) message = "unknown option '" + message.substr(unknown.size()) + "'";
-    std::cerr << "facets: config file " << (files.empty() ? std::string("?") : files.front()) << ": " << message
+    std::cerr << "facets: " << facets::ConfigErrorMessage(app, files.empty() ? "?" : files.front(), e.what())
               << "\n";
     return e.get_exit_code();
   } catch (const CLI::ParseError& e) {

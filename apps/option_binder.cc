@@ -1,6 +1,11 @@
 #include "apps/option_binder.h"
 
+#include <algorithm>
 #include <charconv>
+#include <cmath>
+#include <stdexcept>
+
+#include "io/input_file.h"
 
 namespace facets {
 
@@ -18,6 +23,83 @@ std::string ConfigText(const std::vector<double>& values) {
   std::string text = "[";
   for (size_t i = 0; i < values.size(); ++i) text += (i > 0 ? "," : "") + ConfigText(values[i]);
   return text + "]";
+}
+
+RegionOfInterest RegionFromNumbers(const std::vector<double>& numbers, const std::string& option) {
+  if (numbers.size() != 6) {
+    throw std::invalid_argument(option + " takes 6 numbers: xmin ymin zmin xmax ymax zmax, got " +
+                                std::to_string(numbers.size()));
+  }
+  RegionOfInterest roi;
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::string name(1, "xyz"[axis]);
+    roi.min[axis] = numbers[axis];
+    roi.max[axis] = numbers[axis + 3];
+    if (!std::isfinite(roi.min[axis]) || !std::isfinite(roi.max[axis])) {
+      throw std::invalid_argument(option + ": " + name + "min or " + name + "max is not finite");
+    }
+    if (!(roi.min[axis] < roi.max[axis])) {
+      throw std::invalid_argument(option + ": " + name + "min " + ConfigText(roi.min[axis]) + " is not below " +
+                                  name + "max " + ConfigText(roi.max[axis]));
+    }
+  }
+  return roi;
+}
+
+namespace {
+
+// A key a --config file may hold: an option's long name in its subcommand's section.
+struct ConfigKey {
+  std::string section, name;
+  std::string Text() const { return "'" + name + "' in [" + section + "]"; }
+};
+
+std::vector<ConfigKey> KnownConfigKeys(const CLI::App& app) {
+  std::vector<ConfigKey> keys;
+  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
+    for (const CLI::Option* option : sub->get_options()) {
+      if (!option->get_configurable()) continue;
+      for (const std::string& name : option->get_lnames()) keys.push_back({sub->get_name(), name});
+    }
+  }
+  return keys;
+}
+
+// CLI11 names an unknown key "section.key", an unknown section "section.++", and a key
+// outside any section by itself.
+std::string UnknownConfigKey(const std::vector<ConfigKey>& known, const std::string& dotted) {
+  const size_t dot = dotted.find('.');
+  const std::string section = dot == std::string::npos ? "" : dotted.substr(0, dot);
+  const std::string name = dot == std::string::npos ? dotted : dotted.substr(dot + 1);
+  std::vector<std::string> sections;
+  for (const ConfigKey& key : known) {
+    if (std::find(sections.begin(), sections.end(), key.section) == sections.end()) sections.push_back(key.section);
+  }
+  if (name == "++") {
+    return "unknown section [" + section + "] (nearest known section: [" + NearestName(section, sections) + "])";
+  }
+  // Within a known section its own keys; outside any or in an unknown one, every key.
+  const bool known_section = std::find(sections.begin(), sections.end(), section) != sections.end();
+  std::vector<std::string> names;
+  std::vector<const ConfigKey*> keys;
+  for (const ConfigKey& key : known) {
+    if (known_section && key.section != section) continue;
+    names.push_back(key.name);
+    keys.push_back(&key);
+  }
+  std::string message = "unknown key '" + name + "' " + (section.empty() ? "outside any section" : "in [" + section + "]");
+  const std::string nearest = NearestName(name, names);
+  if (nearest.empty()) return message;
+  const size_t at = static_cast<size_t>(std::find(names.begin(), names.end(), nearest) - names.begin());
+  return message + " (nearest known key: " + keys[at]->Text() + ")";
+}
+
+}  // namespace
+
+std::string ConfigErrorMessage(const CLI::App& app, const std::string& file, const std::string& error) {
+  const std::string unknown = "INI was not able to parse ";
+  if (error.rfind(unknown, 0) != 0) return "config file " + file + ": " + error;
+  return "config file " + file + ": " + UnknownConfigKey(KnownConfigKeys(app), error.substr(unknown.size()));
 }
 
 CLI::Option* OptionBinder::Keep(CLI::Option* option) const {

@@ -12,6 +12,8 @@
 #include <utility>
 #include <vector>
 
+#include "io/image_block.h"
+
 namespace facets {
 
 // A value as a --config file reads it back: doubles in their shortest exact form (so a
@@ -22,6 +24,16 @@ std::string ConfigText(bool value);
 std::string ConfigText(const std::string& value);
 std::string ConfigText(const std::optional<double>& value);
 std::string ConfigText(const std::vector<double>& values);
+
+// The region given on the command line as 6 numbers xmin ymin zmin xmax ymax zmax (m);
+// throws naming `option` and the axis when a number is not finite or a min is not below
+// its max (an empty or inverted region would silently select nothing).
+RegionOfInterest RegionFromNumbers(const std::vector<double>& numbers, const std::string& option);
+
+// A --config error the user can act on: the file, and for an unknown key the key, its
+// section and the nearest known key of the subcommands' options (CLI11 says only "INI was
+// not able to parse reconstruct.lamda").
+std::string ConfigErrorMessage(const CLI::App& app, const std::string& file, const std::string& error);
 
 class OptionBinder {
  public:

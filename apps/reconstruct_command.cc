@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "apps/option_binder.h"
 #include "apps/reconstruct_options.h"
 #include "engine/pipeline/products.h"
 #include "engine/pipeline/reconstruction.h"
@@ -140,10 +141,9 @@ void PrepareRun(const ImageBlock& block, const std::string& dir, ReconstructComm
   options.closed.write_start = (std::filesystem::path(dir) / "start.ply").string();
   PlaceLevelImages(block, app, dir, &options, say);
   if (!app.roi.empty()) {
-    if (app.roi.size() != 6) throw std::invalid_argument("--roi takes 6 numbers: xmin ymin zmin xmax ymax zmax");
-    RegionOfInterest roi;
-    roi.min = Eigen::Vector3d(app.roi[0], app.roi[1], app.roi[2]) - block.origin;
-    roi.max = Eigen::Vector3d(app.roi[3], app.roi[4], app.roi[5]) - block.origin;
+    RegionOfInterest roi = RegionFromNumbers(app.roi, "--roi");
+    roi.min -= block.origin;
+    roi.max -= block.origin;
     options.roi = roi;
   }
   options.progress = say;
@@ -223,6 +223,7 @@ void RunReconstruct(const CLI::App& sub, ReconstructCommandLine* line) {
     log.Add(text);
   };
   const std::string& out_arg = line->app.out;
+  if (!line->app.roi.empty()) RegionFromNumbers(line->app.roi, "--roi");  // before anything is written
   CheckReplaceable(out_arg, {"facets.log", "report.json", "settings.ini"});
   for (const std::string& stale : RemoveStaleTemporaryFolders(out_arg)) {
     say("removed " + stale + " (left by a run that was killed)");

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "io/atomic_file.h"
+#include "io/input_file.h"
 
 namespace facets {
 namespace {
@@ -135,6 +136,9 @@ void ReadCameras(std::istream& in, const std::string& file, ImageBlock* block) {
     }
   }
   if (in.bad()) throw std::runtime_error(file + ": read error");
+  if (block->cameras.empty()) {
+    throw std::runtime_error(file + ": is empty: no camera lines (only comments or blank lines)");
+  }
 }
 
 void ReadImages(std::istream& in, const std::string& file, ImageBlock* block) {
@@ -188,6 +192,9 @@ void ReadImages(std::istream& in, const std::string& file, ImageBlock* block) {
     block->images.push_back(std::move(image));
   }
   if (in.bad()) throw std::runtime_error(file + ": read error");
+  if (block->images.empty()) {
+    throw std::runtime_error(file + ": is empty: no image lines (only comments or blank lines)");
+  }
 }
 
 void ReadPoints(std::istream& in, const std::string& file, ImageBlock* block) {
@@ -248,12 +255,6 @@ ImageBlock ReadModel(std::istream& cameras, const std::string& cameras_name,
   return block;
 }
 
-std::ifstream OpenInput(const fs::path& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path.string() + ": cannot open file");
-  return in;
-}
-
 // %.17g without printf's dependence on the C locale.
 void AppendNumber(std::string* out, double value) {
   char buffer[40];
@@ -285,11 +286,19 @@ ImageBlock ReadColmapModel(const std::string& sparse_dir, const std::string& ima
   const fs::path cameras_path = dir / "cameras.txt";
   const fs::path images_path = dir / "images.txt";
   const fs::path points_path = dir / "points3D.txt";
-  std::ifstream cameras = OpenInput(cameras_path);
-  std::ifstream images = OpenInput(images_path);
+  if (!fs::exists(cameras_path) && fs::exists(dir / "cameras.bin")) {
+    throw std::runtime_error(sparse_dir + ": holds a binary COLMAP model (cameras.bin); Facets reads "
+                             "the text form: colmap model_converter --output_type TXT");
+  }
+  if (!image_dir.empty() && !fs::is_directory(image_dir)) {
+    throw std::runtime_error(image_dir + ": image folder does not exist" +
+                             (fs::exists(image_dir) ? " (it is a file)" : ""));
+  }
+  std::ifstream cameras = OpenInputFile(cameras_path.string(), "COLMAP cameras file");
+  std::ifstream images = OpenInputFile(images_path.string(), "COLMAP images file");
   std::ifstream points;
   const bool has_points = fs::exists(points_path);
-  if (has_points) points = OpenInput(points_path);
+  if (has_points) points = OpenInputFile(points_path.string(), "COLMAP points file");
   ImageBlock block = ReadModel(cameras, cameras_path.string(), images, images_path.string(),
                                has_points ? &points : nullptr, points_path.string());
   if (!image_dir.empty()) {

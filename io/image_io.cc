@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "io/atomic_file.h"
+#include "io/input_file.h"
 
 namespace facets {
 namespace {
@@ -31,13 +32,19 @@ void Deinterleave(const std::vector<T>& interleaved, ImagePlanes* image) {
   }
 }
 
+// Reads the whole image in the file's own type. A decoder that meets corrupt data may
+// still return true and fill the rest with zeros (libtiff on a damaged deflate strip);
+// its error is then only in has_error(), so that is an error here too.
 template <typename T>
 void ReadAs(OIIO::ImageInput* in, OIIO::TypeDesc type, const std::string& path,
             ImagePlanes* image) {
   std::vector<T> interleaved(static_cast<size_t>(image->width) * image->height *
                              image->channels);
-  if (!in->read_image(0, 0, 0, image->channels, type, interleaved.data())) {
-    throw std::runtime_error(path + ": cannot read pixels: " + in->geterror());
+  const bool read = in->read_image(0, 0, 0, image->channels, type, interleaved.data());
+  if (!read || in->has_error()) {
+    const std::string error = in->geterror();
+    throw std::runtime_error(path + ": cannot decode the pixels (corrupt or truncated file)" +
+                             (error.empty() ? std::string() : ": " + error));
   }
   Deinterleave(interleaved, image);
 }
@@ -77,8 +84,12 @@ ImagePlanes ImagePlanes::Grey() const {
   return grey;
 }
 
-ImagePlanes ReadImage(const std::string& path) {
-  if (!fs::exists(path)) throw std::runtime_error(path + ": image file not found");
+namespace {
+
+// Reads `path`; when `expected` is given, its size is checked against the camera's before
+// any pixel is read (a wrong or damaged header must not size an allocation).
+ImagePlanes ReadImageChecked(const std::string& path, const Camera* expected) {
+  CheckInputFile(path, "image file");
   auto in = OIIO::ImageInput::open(path);
   if (!in) {
     throw std::runtime_error(path + ": cannot read image: " + OIIO::geterror());
@@ -90,6 +101,13 @@ ImagePlanes ReadImage(const std::string& path) {
   image.channels = spec.nchannels;
   if (image.width <= 0 || image.height <= 0 || image.channels <= 0) {
     throw std::runtime_error(path + ": image has no pixels");
+  }
+  if (expected != nullptr && (image.width != expected->width || image.height != expected->height)) {
+    throw std::runtime_error(path + ": image is " + std::to_string(image.width) + "x" +
+                             std::to_string(image.height) + " pixels but camera " +
+                             std::to_string(expected->camera_id) + " expects " +
+                             std::to_string(expected->width) + "x" +
+                             std::to_string(expected->height));
   }
   image.data.resize(static_cast<size_t>(image.width) * image.height * image.channels);
   // Read in the file's own type so values stay on its grey scale (OIIO would normalise
@@ -122,16 +140,12 @@ ImagePlanes ReadImage(const std::string& path) {
   return image;
 }
 
+}  // namespace
+
+ImagePlanes ReadImage(const std::string& path) { return ReadImageChecked(path, nullptr); }
+
 ImagePlanes ReadImageFor(const std::string& path, const Camera& camera) {
-  ImagePlanes image = ReadImage(path);
-  if (image.width != camera.width || image.height != camera.height) {
-    throw std::runtime_error(path + ": image is " + std::to_string(image.width) + "x" +
-                             std::to_string(image.height) + " pixels but camera " +
-                             std::to_string(camera.camera_id) + " expects " +
-                             std::to_string(camera.width) + "x" +
-                             std::to_string(camera.height));
-  }
-  return image;
+  return ReadImageChecked(path, &camera);
 }
 
 void WriteImage(const std::string& path, const ImagePlanes& image, int bits) {

@@ -14,6 +14,7 @@
 #include <string_view>
 
 #include "io/atomic_file.h"
+#include "io/input_file.h"
 
 namespace facets {
 
@@ -167,8 +168,7 @@ MeshData ReadObj(std::istream& in, const std::string& source_name) {
 }
 
 MeshData ReadObj(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open OBJ file");
+  std::ifstream in = OpenInputFile(path, "OBJ file");
   return ReadObj(in, path);
 }
 

@@ -242,7 +242,24 @@ TEST(PlyIoTest, MalformedInputsThrowNamingFileAndProblem) {
        "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty double x\n"
        "property double y\nproperty double z\nend_header\n" +
            std::string(30, '\0'),
-       "truncated binary data in vertex 1"},
+       "need at least 48 bytes of data, but only 30 bytes follow the header"},
+      {"huge_count",
+       "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\nproperty float x\n"
+       "property float y\nproperty float z\nend_header\n" +
+           std::string(12, '\0'),
+       "(1000000000 vertex) need at least 12000000000 bytes"},
+      {"huge_ascii_count",
+       "ply\nformat ascii 1.0\nelement vertex 1000000000\nproperty float x\n"
+       "property float y\nproperty float z\nend_header\n0 0 0\n",
+       "need at least 6000000000 bytes"},
+      {"list_past_end", header + "0 0 0\n1 0 0\n0 1 0\n200 0 1 2\n",
+       "face 0: list of 200 values runs past the end of its line"},
+      {"truncated_list",
+       "ply\nformat binary_little_endian 1.0\nelement vertex 0\nproperty float x\n"
+       "property float y\nproperty float z\nelement face 1\nproperty list uint int vertex_indices\n"
+       "end_header\n" +
+           std::string("\x03\0\0\0\0\0\0\0", 8),
+       "face 0: list of 3 values runs past the end of the file"},
   };
   for (const Case& c : cases) {
     std::istringstream in(c.text);
@@ -253,6 +270,17 @@ TEST(PlyIoTest, MalformedInputsThrowNamingFileAndProblem) {
   }
   const std::string missing = ErrorOf([] { ReadPly("/nonexistent/dir/mesh.ply"); });
   EXPECT_NE(missing.find("/nonexistent/dir/mesh.ply"), std::string::npos) << missing;
+}
+
+// An element without properties takes no bytes whatever its count: it is passed over at
+// once, not walked instance by instance.
+TEST(PlyIoTest, ElementWithoutPropertiesIsPassedOver) {
+  std::istringstream in(
+      "ply\nformat binary_little_endian 1.0\nelement nothing 1000000000000000\n"
+      "element vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n" +
+      std::string(12, '\0'));
+  const MeshData mesh = ReadPly(in, "nothing.ply");
+  EXPECT_EQ(mesh.vertices.size(), 1u);
 }
 
 TEST(PlyIoTest, WriterRejectsInconsistentMesh) {

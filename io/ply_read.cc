@@ -4,6 +4,7 @@
 #include <bit>
 #include <cctype>
 #include <charconv>
+#include <climits>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -15,6 +16,7 @@
 #include <stdexcept>
 #include <string_view>
 
+#include "io/input_file.h"
 #include "io/ply_io.h"
 
 namespace facets {
@@ -86,6 +88,13 @@ enum class PlyFormat { kAscii, kBinaryLittle, kBinaryBig };
   throw std::runtime_error(source + ": " + what);
 }
 
+template <typename T>
+double FromBytes(const unsigned char* bytes) {
+  T value;
+  std::memcpy(&value, bytes, sizeof(T));
+  return static_cast<double>(value);
+}
+
 // Reads one scalar of `type` at `*cursor`, advancing it; fails (naming `context`) when
 // the data ends first. Every PLY scalar fits a double exactly (32-bit integers too).
 double ReadBinaryScalar(const char** cursor, const char* end, PlyType type, bool swap,
@@ -97,43 +106,14 @@ double ReadBinaryScalar(const char** cursor, const char* end, PlyType type, bool
   *cursor += size;
   if (swap) std::reverse(bytes, bytes + size);
   switch (type) {
-    case PlyType::kInt8: {
-      int8_t v;
-      std::memcpy(&v, bytes, 1);
-      return v;
-    }
-    case PlyType::kUint8:
-      return bytes[0];
-    case PlyType::kInt16: {
-      int16_t v;
-      std::memcpy(&v, bytes, 2);
-      return v;
-    }
-    case PlyType::kUint16: {
-      uint16_t v;
-      std::memcpy(&v, bytes, 2);
-      return v;
-    }
-    case PlyType::kInt32: {
-      int32_t v;
-      std::memcpy(&v, bytes, 4);
-      return v;
-    }
-    case PlyType::kUint32: {
-      uint32_t v;
-      std::memcpy(&v, bytes, 4);
-      return v;
-    }
-    case PlyType::kFloat32: {
-      float v;
-      std::memcpy(&v, bytes, 4);
-      return v;
-    }
-    case PlyType::kFloat64: {
-      double v;
-      std::memcpy(&v, bytes, 8);
-      return v;
-    }
+    case PlyType::kInt8: return FromBytes<int8_t>(bytes);
+    case PlyType::kUint8: return FromBytes<uint8_t>(bytes);
+    case PlyType::kInt16: return FromBytes<int16_t>(bytes);
+    case PlyType::kUint16: return FromBytes<uint16_t>(bytes);
+    case PlyType::kInt32: return FromBytes<int32_t>(bytes);
+    case PlyType::kUint32: return FromBytes<uint32_t>(bytes);
+    case PlyType::kFloat32: return FromBytes<float>(bytes);
+    case PlyType::kFloat64: return FromBytes<double>(bytes);
   }
   return 0.0;
 }
@@ -222,6 +202,32 @@ struct PlyHeader {
   std::string crs;
   std::vector<PlyElement> elements;
 };
+
+// The fewest bytes the body after `header` can take: binary, every scalar and list count
+// at its type's size with all lists empty; ascii, 2 bytes per value (a digit and a
+// separator). Saturates at ULLONG_MAX instead of overflowing. Checked against the file
+// before anything is allocated, so a short file cannot claim 10^9 vertices.
+unsigned long long MinimumBodyBytes(const PlyHeader& header) {
+  const bool binary = header.format != PlyFormat::kAscii;
+  unsigned long long total = 0;
+  for (const PlyElement& element : header.elements) {
+    unsigned long long record = 0;
+    for (const PlyProperty& p : element.properties) {
+      record += binary ? PlyTypeSize(p.is_list ? p.count_type : p.type) : 2;
+    }
+    if (element.count > (ULLONG_MAX - total) / std::max(record, 1ULL)) return ULLONG_MAX;
+    total += element.count * record;
+  }
+  return total;
+}
+
+std::string CountsText(const PlyHeader& header) {
+  std::string text;
+  for (const PlyElement& element : header.elements) {
+    text += (text.empty() ? "" : ", ") + std::to_string(element.count) + " " + element.name;
+  }
+  return text;
+}
 
 // What the reader does with one element's properties: the MeshData field of each
 // vertex property, or the face's vertex list and label.
@@ -323,11 +329,18 @@ class PlyReader {
     mesh_.crs = header.crs;
     binary_ = header.format != PlyFormat::kAscii;
     swap_ = header.format == PlyFormat::kBinaryBig;
-    if (binary_) {
-      data_.assign(std::istreambuf_iterator<char>(in_), std::istreambuf_iterator<char>());
-    }
+    data_.assign(std::istreambuf_iterator<char>(in_), std::istreambuf_iterator<char>());
+    if (in_.bad()) Fail(src_, "read error after the header");
     cursor_ = data_.data();
     end_ = data_.data() + data_.size();
+    in_body_ = true;
+    const unsigned long long needed = MinimumBodyBytes(header);
+    if (needed > data_.size() + (binary_ ? 0 : 1)) {  // ascii: the last value needs no separator
+      Fail(src_, "header counts (" + CountsText(header) + ") need at least " +
+                     (needed == ULLONG_MAX ? std::string("2^64") : std::to_string(needed)) +
+                     " bytes of data, but only " + std::to_string(data_.size()) +
+                     " bytes follow the header (truncated file or wrong counts)");
+    }
     for (const PlyElement& element : header.elements) ReadElement(element);
     if (!have_xyz_) Fail(src_, "no vertex element");
     mesh_.Check(src_);
@@ -337,7 +350,14 @@ class PlyReader {
  private:
   // The next line into line_ without a trailing '\r'; false at the end of the stream.
   bool NextLine() {
-    if (!std::getline(in_, line_)) return false;
+    if (!in_body_) {
+      if (!std::getline(in_, line_)) return false;
+    } else {
+      if (cursor_ >= end_) return false;
+      const char* newline = std::find(cursor_, end_, '\n');
+      line_.assign(cursor_, newline);
+      cursor_ = newline == end_ ? end_ : newline + 1;
+    }
     ++line_number_;
     if (!line_.empty() && line_.back() == '\r') line_.pop_back();
     return true;
@@ -393,6 +413,7 @@ class PlyReader {
 
   void ReadElement(const PlyElement& element) {
     const ElementLayout layout = LayoutOf(element, src_);
+    if (element.properties.empty()) return;  // nothing stored per instance
     if (layout.is_vertex) {
       have_xyz_ = true;
       mesh_.vertices.reserve(element.count);
@@ -436,6 +457,7 @@ class PlyReader {
         Fail(src_, context + ": bad list length " + std::to_string(count));
       }
       const size_t n = static_cast<size_t>(count);
+      CheckListFits(n, prop.type, context);
       if (layout.is_face && static_cast<int>(p) == layout.face_list) {
         list_.resize(n);
         for (size_t k = 0; k < n; ++k) list_[k] = ReadScalar(prop.type, ascii, context);
@@ -445,6 +467,17 @@ class PlyReader {
     }
     if (ascii && !ascii->AtEnd()) {
       Fail(src_, "line " + std::to_string(line_number_) + ": too many values for " + context);
+    }
+  }
+
+  // A list of n items must fit in what is left (binary) or on its line (ascii, 2 bytes
+  // per value) before a list of that size is allocated.
+  void CheckListFits(size_t n, PlyType type, const std::string& context) const {
+    const size_t left = binary_ ? static_cast<size_t>(end_ - cursor_) / PlyTypeSize(type)
+                                : line_.size() / 2 + 1;
+    if (n > left) {
+      Fail(src_, context + ": list of " + std::to_string(n) + " values runs past the " +
+                     (binary_ ? "end of the file" : "end of its line"));
     }
   }
 
@@ -540,7 +573,8 @@ class PlyReader {
   size_t line_number_ = 0;
   bool binary_ = false;
   bool swap_ = false;
-  std::string data_;  // the binary body, read whole
+  bool in_body_ = false;             // lines come from data_, no longer from in_
+  std::string data_;  // the body after the header, read whole
   const char* cursor_ = nullptr;
   const char* end_ = nullptr;
   MeshData mesh_;
@@ -556,8 +590,7 @@ MeshData ReadPly(std::istream& in, const std::string& source_name) {
 }
 
 MeshData ReadPly(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path + ": cannot open PLY file");
+  std::ifstream in = OpenInputFile(path, "PLY file");
   return ReadPly(in, path);
 }
 

@@ -1,6 +1,7 @@
 #include "io/project_io.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,7 @@
 #include <stdexcept>
 
 #include "io/atomic_file.h"
+#include "io/input_file.h"
 
 namespace facets {
 namespace {
@@ -39,6 +41,18 @@ class Reader {
     const auto it = object.find(key);
     if (it == object.end()) Fail(Join(path, key), "is missing");
     return *it;
+  }
+  // Every key of `object` must be one of `known`: a misspelt optional key would
+  // otherwise be dropped without a word (docs/PROJECT_FILE.md lists the keys).
+  void KnownKeys(const json& object, const std::string& path,
+                 const std::vector<std::string>& known) const {
+    if (!object.is_object()) Fail(path.empty() ? "(top level)" : path, "is not an object");
+    for (const auto& item : object.items()) {
+      if (std::find(known.begin(), known.end(), item.key()) == known.end()) {
+        throw std::runtime_error(file_ + ": " + (path.empty() ? "top level" : path) + ": " +
+                                 UnknownKeyMessage(item.key(), known));
+      }
+    }
   }
   const json* Optional(const json& object, const std::string& key) const {
     const auto it = object.find(key);
@@ -100,6 +114,9 @@ int NumFocalAndPrincipal(CameraModel model) {
 }
 
 Camera ReadCamera(const Reader& r, const json& node, const std::string& path) {
+  r.KnownKeys(node, path,
+              {"id", "model", "focal_length_mm", "pixel_size_um", "principal_point_offset_mm",
+               "width_px", "height_px", "distortion"});
   const int id = static_cast<int>(r.Integer(r.Field(node, path, "id"), Reader::Join(path, "id")));
   CameraModel model = CameraModel::kPinhole;
   if (const json* m = r.Optional(node, "model")) {
@@ -175,7 +192,9 @@ json Array3(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}
 
 // Checks format, version and rotation convention; returns radians per angle unit.
 double ReadProjectConventions(const Reader& r, const json& root) {
-  if (!root.is_object()) r.Fail("(top level)", "is not an object");
+  r.KnownKeys(root, "",
+              {"format", "version", "angle_unit", "rotation", "crs", "origin",
+               "mean_terrain_height", "region_of_interest", "cameras", "images", "tie_points"});
   if (r.String(r.Field(root, "", "format"), "format") != "facets-project") {
     r.Fail("format", "must be \"facets-project\"");
   }
@@ -199,6 +218,8 @@ double ReadProjectConventions(const Reader& r, const json& root) {
 BlockImage ReadImage(const Reader& r, const json& node, const std::string& ipath,
                      const fs::path& dir, double to_rad, const ImageBlock& block,
                      std::set<int>* image_ids, Eigen::Vector3d* centre) {
+  r.KnownKeys(node, ipath,
+              {"id", "path", "camera", "projection_centre", "omega", "phi", "kappa"});
   BlockImage image;
   image.image_id =
       static_cast<int>(r.Integer(r.Field(node, ipath, "id"), Reader::Join(ipath, "id")));
@@ -259,6 +280,7 @@ std::vector<TrackElement> ReadTrack(const Reader& r, const json& track, const st
 TiePoint ReadTiePoint(const Reader& r, const json& node, const std::string& ppath,
                       const Eigen::Vector3d& origin, const std::set<int>& image_ids,
                       std::set<long long>* point_ids) {
+  r.KnownKeys(node, ppath, {"id", "xyz", "rgb", "error", "track"});
   TiePoint point;
   point.point3d_id = r.Integer(r.Field(node, ppath, "id"), ppath + ".id");
   if (!point_ids->insert(point.point3d_id).second) {
@@ -281,13 +303,21 @@ TiePoint ReadTiePoint(const Reader& r, const json& node, const std::string& ppat
 // Region of interest and mean terrain height, both made local.
 void ReadRegionAndHeight(const Reader& r, const json& root, ImageBlock* block) {
   if (const json* roi = r.Optional(root, "region_of_interest")) {
+    r.KnownKeys(*roi, "region_of_interest", {"min", "max"});
     RegionOfInterest region;
     region.min = r.Vector3(r.Field(*roi, "region_of_interest", "min"), "region_of_interest.min") -
                  block->origin;
     region.max = r.Vector3(r.Field(*roi, "region_of_interest", "max"), "region_of_interest.max") -
                  block->origin;
-    if (!(region.min.array() <= region.max.array()).all()) {
-      r.Fail("region_of_interest", "has min > max");
+    for (int axis = 0; axis < 3; ++axis) {
+      if (region.min[axis] > region.max[axis]) {
+        const std::string name(1, "XYZ"[axis]);
+        r.Fail("region_of_interest", "has min " + name + " > max " + name + " (" +
+                                         std::to_string(region.min[axis] + block->origin[axis]) +
+                                         " > " +
+                                         std::to_string(region.max[axis] + block->origin[axis]) +
+                                         ")");
+      }
     }
     block->roi = region;
   }
@@ -368,8 +398,7 @@ json TiePointsJson(const std::vector<TiePoint>& tie_points, const Eigen::Vector3
 }  // namespace
 
 ImageBlock ReadProject(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open project file");
+  std::ifstream in = OpenInputFile(path, "project file");
   json root;
   try {
     root = json::parse(in);

@@ -306,11 +306,17 @@ TEST(ProjectIoTest, ErrorsNameFileAndJsonPath) {
   EXPECT_NE(ErrorOfProject(Replace(good, "\"id\": 2,", "\"id\": 1,")).find("duplicates image id 1"),
             std::string::npos);
   EXPECT_NE(ErrorOfProject(Replace(good, "\"max\": [1400, 2100, 100]", "\"max\": [1400, 2100, -1]"))
-                .find("region_of_interest has min > max"),
+                .find("region_of_interest has min Z > max Z (0.000000 > -1.000000)"),
             std::string::npos);
   EXPECT_NE(ErrorOfProject(good.substr(0, good.size() / 2)).find("not valid JSON"),
             std::string::npos);
   EXPECT_THROW(ReadProject("/nonexistent/facets.json"), std::runtime_error);
+  // Misspelt keys at every level are errors naming the nearest known key.
+  EXPECT_NE(ErrorOfProject(Replace(good, "\"focal_length_mm\": 153.0", "\"focal_lenght_mm\": 153.0"))
+                .find("cameras[0]: unknown key 'focal_lenght_mm' (nearest known key: 'focal_length_mm')"),
+            std::string::npos);
+  EXPECT_NE(ErrorOfProject(Replace(good, "\"crs\"", "\"CRS\"")).find("top level: unknown key 'CRS'"),
+            std::string::npos);
   fs::remove_all(TempDir("project_errors"));
 }
 

@@ -493,6 +493,12 @@ EvaluationReport EvaluateFiles(const std::string& truth_dir, const std::string& 
                                const EvaluationOptions& options) {
   const TruthScene truth = ReadTruthScene(truth_dir);
   const MeshData mesh = ReadMesh(mesh_path);
+  // Without faces every distance would be missing, and the accuracy of nothing reads as
+  // an rms of 0.
+  if (mesh.faces.empty()) {
+    throw std::runtime_error(mesh_path + ": has no faces (" + std::to_string(mesh.vertices.size()) +
+                             " vertices): nothing to evaluate");
+  }
   EvaluationReport report = Evaluate(truth, mesh, options);
   report.truth_name = truth_dir;
   report.mesh_name = mesh_path;

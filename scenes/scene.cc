@@ -7,6 +7,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "io/input_file.h"
+
 namespace facets {
 namespace {
 
@@ -479,8 +481,7 @@ Scene ParseScene(std::istream& in, const std::string& source_name) {
 }
 
 Scene LoadScene(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open scene file");
+  std::ifstream in = OpenInputFile(path, "scene file");
   return ParseScene(in, path);
 }
 

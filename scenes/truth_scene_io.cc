@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "io/colmap_io.h"
+#include "io/input_file.h"
 #include "scenes/evaluate.h"
 
 namespace facets {
@@ -70,8 +71,7 @@ void ReadTruthLabels(const nlohmann::json& labels, const std::string& json_path,
 
 // truth.json: the GSD (m, required), region of interest, buildings and label names.
 void ReadTruthJson(const std::string& json_path, TruthScene* truth) {
-  std::ifstream json_in(json_path);
-  if (!json_in) throw std::runtime_error(json_path + ": cannot open");
+  std::ifstream json_in = OpenInputFile(json_path, "truth description");
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(json_in);

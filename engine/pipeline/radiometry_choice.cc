@@ -142,7 +142,7 @@ double SampleGrey(const ImageBlock& block, std::vector<Observation>* observation
   std::vector<double> full_scale(block.images.size(), 0.0);
   tbb::parallel_for(size_t{0}, block.images.size(), [&](size_t i) {
     if (of_image[i].empty()) return;
-    const ImagePlanes grey = ReadImage(block.images[i].path).Grey();
+    const ImagePlanes grey = ReadImageFor(block.images[i].path, block.CameraOf(block.images[i])).Grey();
     full_scale[i] = FullScale(grey.bits);
     for (Observation* o : of_image[i]) o->grey = WindowMean(grey, o->xy, full_scale[i]);
   });

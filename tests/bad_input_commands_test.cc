@@ -1,0 +1,141 @@
+// Bad input to the mesh readers (PLY, OBJ) and to the subcommands other than
+// reconstruct: creases, export, evaluate, render. tests/bad_input.h says what every
+// case asserts; tests/bad_input_readers_test.cc has reconstruct's readers.
+#include <cstdint>
+#include <string>
+
+#include "io/ply_io.h"
+#include "tests/bad_input.h"
+
+namespace facets::bad_input {
+namespace {
+
+// A binary little-endian PLY with `vertices` double x y z and `faces` uchar/int lists as
+// claimed in the header, followed by `body` (whatever bytes the case needs).
+std::string BinaryPly(const std::string& vertices, const std::string& faces, const std::string& body,
+                      const std::string& list_count_type = "uchar") {
+  return "ply\nformat binary_little_endian 1.0\nelement vertex " + vertices +
+         "\nproperty double x\nproperty double y\nproperty double z\nelement face " + faces + "\nproperty list " +
+         list_count_type + " int vertex_indices\nend_header\n" + body;
+}
+
+// One triangle: three vertices at the corners of the unit square's lower half.
+MeshData Triangle() {
+  MeshData mesh;
+  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  mesh.faces = {{0, 1, 2}};
+  return mesh;
+}
+
+class BadMesh : public testing::Test {
+ protected:
+  void SetUp() override { dir_ = CaseFolder(); }
+  // `facets creases` on `tin`: its first step reads the TIN.
+  std::string Creases(const fs::path& tin) const {
+    return "creases " + tin.string() + " --edge 1 --out " + Out().string();
+  }
+  fs::path Out() const { return dir_ / "out.ply"; }
+  fs::path dir_;
+};
+
+TEST_F(BadMesh, PlyHeaderCountsAreCheckedAgainstTheFileSize) {
+  const fs::path ply = dir_ / "huge.ply";
+  WriteText(ply, BinaryPly("100000000", "0", std::string(40, '\0')));
+  ASSERT_LT(fs::file_size(ply), 260u);
+  ExpectRefused(Creases(ply), {"huge.ply", "100000000 vertex", "need at least 2400000000 bytes", "only 40 bytes"},
+                Out());
+  WriteText(ply, "ply\nformat ascii 1.0\nelement vertex 100000000\nproperty float x\nproperty float y\n"
+                 "property float z\nend_header\n0 0 0\n");
+  ExpectRefused(Creases(ply), {"huge.ply", "need at least 600000000 bytes"}, Out());
+  WriteText(ply, BinaryPly("3", "1", std::string(72, '\0') + "\xff\xff\xff\x7f", "uint"));
+  ExpectRefused(Creases(ply), {"huge.ply", "face 0: list of 2147483647 values runs past the end of the file"}, Out());
+  WriteText(ply, BinaryPly("3", "2", std::string(72, '\0') + std::string("\x03\0\0\0\0\x01\0\0\0\x02\0\0\0\x03", 14)));
+  ExpectRefused(Creases(ply), {"huge.ply", "face 1: list of 3 values runs past the end of the file"}, Out());
+}
+
+TEST_F(BadMesh, PlyAndObjContents) {
+  const fs::path ply = dir_ / "bad.ply";
+  WriteText(ply, "");
+  ExpectRefused(Creases(ply), {"bad.ply", "PLY file is empty"}, Out());
+  fs::remove(ply);
+  fs::create_directories(ply);
+  ExpectRefused(Creases(ply), {"bad.ply", "is a folder"}, Out());
+  fs::remove(ply);
+  WriteText(ply, "solid cube\nfacet normal 0 0 1\n");
+  ExpectRefused(Creases(ply), {"bad.ply", "not a PLY file"}, Out());
+  WriteText(ply, "ply\nformat binary_middle_endian 1.0\nend_header\n");
+  ExpectRefused(Creases(ply), {"bad.ply", "unknown PLY format 'binary_middle_endian'"}, Out());
+  WriteText(ply, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                 "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n");
+  ExpectRefused(Creases(ply), {"bad.ply", "face 0: vertex index 7 out of range (3 vertices)"}, Out());
+  WriteText(ply, "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+                 "end_header\n0 nan 0\n");
+  ExpectRefused(Creases(ply), {"bad.ply", "vertex 0: coordinate is not finite"}, Out());
+  const fs::path obj = dir_ / "bad.obj";
+  WriteText(obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n");
+  ExpectRefused(Creases(obj), {"bad.obj", "line 4", "face index 4 out of range"}, Out());
+  WriteText(obj, "v 0 0\n");
+  ExpectRefused(Creases(obj), {"bad.obj", "line 1", "malformed vertex"}, Out());
+  WriteText(dir_ / "mesh.stl", "solid\n");
+  ExpectRefused(Creases(dir_ / "mesh.stl"), {"mesh.stl", "unknown mesh format '.stl'"}, Out());
+}
+
+TEST_F(BadMesh, Export) {
+  const fs::path run = dir_ / "run", out = dir_ / "products";
+  const std::string args = " --out " + out.string() + " --formats ply,dsm";
+  ExpectRefused("export " + (dir_ / "nowhere").string() + args, {"nowhere", "no such run folder"}, out);
+  fs::create_directories(run);
+  ExpectRefused("export " + run.string() + args, {"surface.ply", "missing"}, out);
+  WriteText(run / "surface.ply", BinaryPly("4000000000", "0", ""));
+  ExpectRefused("export " + run.string() + args, {"surface.ply", "need at least"}, out);
+  WritePly((run / "surface.ply").string(), Triangle());
+  ExpectRefused("export " + run.string() + args, {"surface.ply", "no vertex colours"}, out);
+  ExpectRefused("export " + run.string() + " --out " + out.string() + " --formats ply,stl", {"'stl'"}, out);
+}
+
+// A truth folder as `facets render` writes it, reduced to what `facets evaluate` reads:
+// truth.json, truth.ply and a COLMAP model in sparse/.
+fs::path WriteTruth(const fs::path& dir) {
+  const fs::path truth = dir / "truth";
+  WriteText(truth / "truth.json", "{\"ground_pixel_size\": 0.1}\n");
+  WritePly((truth / "truth.ply").string(), Triangle());
+  WriteText(truth / "sparse" / "cameras.txt", "1 PINHOLE 64 48 60 60 32 24\n");
+  WriteText(truth / "sparse" / "images.txt", "1 1 0 0 0 0 0 10 1 a.png\n\n");
+  return truth;
+}
+
+TEST_F(BadMesh, Evaluate) {
+  const fs::path truth = WriteTruth(dir_);
+  const fs::path json = dir_ / "report.json";
+  const fs::path mesh = dir_ / "mesh.ply";
+  MeshData no_faces = Triangle();
+  no_faces.faces.clear();
+  WritePly(mesh.string(), no_faces);
+  const std::string tail = " --mesh " + mesh.string() + " --json " + json.string();
+  ExpectRefused("evaluate --truth " + truth.string() + tail, {"mesh.ply", "has no faces (3 vertices)"}, json);
+  WritePly(mesh.string(), Triangle());
+  ExpectRefused("evaluate --truth " + truth.string() + tail + " --roi 0 0 1 1 1 0",
+                {"--roi", "zmin 1 is not below zmax 0"}, json);
+  fs::remove(truth / "truth.json");
+  ExpectRefused("evaluate --truth " + truth.string() + tail, {"truth.json", "not found"}, json);
+  WriteTruth(dir_);
+  WriteText(truth / "sparse" / "images.txt", "# no images\n");
+  ExpectRefused("evaluate --truth " + truth.string() + tail, {"images.txt", "is empty"}, json);
+  ExpectRefused("evaluate --truth " + (dir_ / "nowhere").string() + tail, {"nowhere"}, json);
+}
+
+TEST_F(BadMesh, Render) {
+  const fs::path scene = dir_ / "scene.json", out = dir_ / "rendered";
+  const std::string args = "render " + scene.string() + " --out " + out.string();
+  ExpectRefused(args, {"scene.json", "scene file not found"}, out);
+  WriteText(scene, "{\"name\": \"x\", ");
+  ExpectRefused(args, {"scene.json", "invalid JSON"}, out);
+  WriteText(scene, "{\"name\": \"x\"}");
+  ExpectRefused(args, {"scene.json", "ground_pixel_size"}, out);
+  fs::remove(scene);
+  fs::create_directories(scene);
+  ExpectRefused(args, {"scene.json", "is a folder"}, out);
+}
+
+}  // namespace
+}  // namespace facets::bad_input
