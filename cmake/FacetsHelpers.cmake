@@ -9,6 +9,8 @@
 #   LABEL: e2e for the tests defined in tests/, unit for the module tests beside their
 #   sources unless given (a module test that renders a scene and reconstructs is e2e).
 #   TIMEOUT: seconds per test case, 120 for unit and 900 for e2e unless given.
+#   The target facets_unit_tests builds every `unit` executable (and nothing else):
+#   scripts/sanitizers.sh builds it with ASan and UBSan and runs `ctest -L unit`.
 #   FACETS_SHARED_DATA_DIR: the real data sets beside the repository (../shared/data),
 #   overridden at run time by the environment variable FACETS_SHARED_DATA
 #   (io/shared_data_for_testing.h).
@@ -44,6 +46,12 @@ function(facets_add_test name)
     endif()
   endif()
   add_executable(${name} ${ARG_SRCS})
+  if(ARG_LABEL STREQUAL "unit")
+    if(NOT TARGET facets_unit_tests)
+      add_custom_target(facets_unit_tests)
+    endif()
+    add_dependencies(facets_unit_tests ${name})
+  endif()
   target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main)
   target_compile_options(${name} PRIVATE ${FACETS_WARNINGS})
   target_compile_definitions(${name} PRIVATE

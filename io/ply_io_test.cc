@@ -283,6 +283,57 @@ TEST(PlyIoTest, ElementWithoutPropertiesIsPassedOver) {
   EXPECT_EQ(mesh.vertices.size(), 1u);
 }
 
+// Counts and values the data cannot back (found by fuzz/ply_fuzzer.cc): each is an error
+// naming the file, never an allocation of the header's count, a hang or an undefined
+// conversion to int.
+TEST(PlyIoTest, CountsAndValuesBeyondTheDataAreErrors) {
+  const std::string ascii = "ply\nformat ascii 1.0\n";
+  const std::string binary = "ply\nformat binary_little_endian 1.0\n";
+  const std::string xyz = "property float x\nproperty float y\nproperty float z\n";
+  const std::string face = "element face 1\nproperty list uchar int vertex_indices\n";
+  const std::string three = "0 0 0\n1 0 0\n0 1 0\n";
+  const std::string floats(36, '\0');  // three binary vertices at the origin
+  struct Case {
+    std::string name, text, expected;
+  };
+  const std::vector<Case> cases = {
+      // Reserving 10^12 vertices (24 TB) was attempted before the data was read.
+      {"ascii_vertex_count", ascii + "element vertex 1000000000000\n" + xyz + "end_header\n" + three,
+       "truncated ascii data: expected 1000000000000 vertex lines, found 3"},
+      {"binary_vertex_count", binary + "element vertex 4000000000\n" + xyz + "end_header\n" + floats,
+       "truncated binary data in vertex 3"},
+      // A list count of 4e9 resized the face's index list to 32 GB.
+      {"binary_list_length",
+       binary + "element vertex 3\n" + xyz + "element face 1\nproperty list uint int vertex_indices\n" +
+           "end_header\n" + floats + std::string("\x00\x28\x6b\xee", 4) + std::string(12, '\0'),
+       "face 0: bad list length 4e+09 (the data left holds 3)"},
+      {"ascii_list_length", ascii + "element vertex 3\n" + xyz + face + "end_header\n" + three + "1e300 0 1 2\n",
+       "face 0: bad list length 1e+300 (the data left holds 3)"},
+      {"views_range", ascii + "element vertex 3\n" + xyz + "property int views\nend_header\n" +
+                          "0 0 0 1\n1 0 0 1e10\n0 1 0 1\n",
+       "vertex 1: views 1e+10 is out of range"},
+      {"label_range", ascii + "element vertex 3\n" + xyz + face + "property int label\nend_header\n" + three +
+                          "3 0 1 2 nan\n",
+       "face 0: label nan is out of range"},
+      // Two vertex elements, one with normals: MeshData::Check threw std::invalid_argument.
+      {"second_vertex", ascii + "element vertex 1\n" + xyz + "element vertex 1\n" + xyz +
+                            "property float nx\nproperty float ny\nproperty float nz\nend_header\n",
+       "line 7: a second 'vertex' element"},
+      {"nan_index", ascii + "element vertex 3\n" + xyz + face + "end_header\n" + three + "3 0 nan 2\n",
+       "face 0: vertex index nan out of range (3 vertices)"},
+  };
+  for (const Case& c : cases) {
+    std::istringstream in(c.text);
+    const std::string message = ErrorOf([&] { ReadPly(in, c.name + ".ply"); });
+    EXPECT_EQ(message.rfind(c.name + ".ply: ", 0), 0u) << message;
+    EXPECT_NE(message.find(c.expected), std::string::npos) << message;
+  }
+  // Instances without properties hold no data: 10^18 of them are read at once.
+  std::istringstream empty_elements(binary + "element marker 1000000000000000000\nelement vertex 3\n" + xyz +
+                                    "end_header\n" + floats);
+  EXPECT_EQ(ReadPly(empty_elements, "marker.ply").vertices.size(), 3u);
+}
+
 TEST(PlyIoTest, WriterRejectsInconsistentMesh) {
   const auto dir = TempDir("bad");
   MeshData mesh = ExampleMesh();

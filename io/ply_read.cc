@@ -88,8 +88,14 @@ enum class PlyFormat { kAscii, kBinaryLittle, kBinaryBig };
   throw std::runtime_error(source + ": " + what);
 }
 
+// A value read from the file for a message, shortest exact form: "-1", "4e+09", "nan".
+std::string FormatNumber(double value) {
+  char text[32];
+  return std::string(text, std::to_chars(text, text + sizeof(text), value).ptr);
+}
+
 template <typename T>
-double FromBytes(const unsigned char* bytes) {
+double Load(const unsigned char* bytes) {
   T value;
   std::memcpy(&value, bytes, sizeof(T));
   return static_cast<double>(value);
@@ -106,14 +112,14 @@ double ReadBinaryScalar(const char** cursor, const char* end, PlyType type, bool
   *cursor += size;
   if (swap) std::reverse(bytes, bytes + size);
   switch (type) {
-    case PlyType::kInt8: return FromBytes<int8_t>(bytes);
-    case PlyType::kUint8: return FromBytes<uint8_t>(bytes);
-    case PlyType::kInt16: return FromBytes<int16_t>(bytes);
-    case PlyType::kUint16: return FromBytes<uint16_t>(bytes);
-    case PlyType::kInt32: return FromBytes<int32_t>(bytes);
-    case PlyType::kUint32: return FromBytes<uint32_t>(bytes);
-    case PlyType::kFloat32: return FromBytes<float>(bytes);
-    case PlyType::kFloat64: return FromBytes<double>(bytes);
+    case PlyType::kInt8: return Load<int8_t>(bytes);
+    case PlyType::kUint8: return Load<uint8_t>(bytes);
+    case PlyType::kInt16: return Load<int16_t>(bytes);
+    case PlyType::kUint16: return Load<uint16_t>(bytes);
+    case PlyType::kInt32: return Load<int32_t>(bytes);
+    case PlyType::kUint32: return Load<uint32_t>(bytes);
+    case PlyType::kFloat32: return Load<float>(bytes);
+    case PlyType::kFloat64: return Load<double>(bytes);
   }
   return 0.0;
 }
@@ -142,6 +148,9 @@ class AsciiLine {
     }
     return value;
   }
+
+  // An upper bound of the values left on the line (each needs a character and a space).
+  size_t Left() const { return (line_.size() - std::min(pos_, line_.size()) + 1) / 2; }
 
   bool AtEnd() {
     while (pos_ < line_.size() && std::isspace(static_cast<unsigned char>(line_[pos_]))) ++pos_;
@@ -179,7 +188,6 @@ std::string Trim(const std::string& s) {
   while (e > b && std::isspace(static_cast<unsigned char>(s[e - 1]))) --e;
   return s.substr(b, e - b);
 }
-
 
 // "comment facets_origin X Y Z" / "comment facets_crs CRS" (see MeshData::origin); any
 // other comment is ignored.
@@ -389,6 +397,13 @@ class PlyReader {
         have_format = true;
       } else if (keyword == "element") {
         header.elements.push_back(ParseElement(ls, where));
+        // One vertex and one face element: a second one would mix attribute sets.
+        const std::string& name = header.elements.back().name;
+        const auto same = [&name](const PlyElement& e) { return e.name == name; };
+        if ((name == "vertex" || name == "face") &&
+            std::count_if(header.elements.begin(), header.elements.end(), same) > 1) {
+          Fail(src_, where + "a second '" + name + "' element");
+        }
       } else if (keyword == "property") {
         if (header.elements.empty()) Fail(src_, where + "property before any element");
         header.elements.back().properties.push_back(ParseProperty(ls, line_, src_, where));
@@ -413,11 +428,12 @@ class PlyReader {
 
   void ReadElement(const PlyElement& element) {
     const ElementLayout layout = LayoutOf(element, src_);
-    if (element.properties.empty()) return;  // nothing stored per instance
+    if (binary_ && element.properties.empty()) return;  // instances of nothing: no data
     if (layout.is_vertex) {
       have_xyz_ = true;
-      mesh_.vertices.reserve(element.count);
-      if (layout.want_normals) mesh_.normals.reserve(element.count);
+      const size_t reserve = std::min(element.count, PlausibleCount(element));
+      mesh_.vertices.reserve(reserve);
+      if (layout.want_normals) mesh_.normals.reserve(reserve);
     }
     for (size_t i = 0; i < element.count; ++i) {
       const std::string context = element.name + " " + std::to_string(i);
@@ -429,6 +445,29 @@ class PlyReader {
       }
     }
     if (layout.want_colors) ScaleUnitColors(element, layout);
+  }
+
+  // How many instances of `element` the data can hold (reserved, whatever the header
+  // says): binary, the bytes left over the instance's scalars and list counts; an ascii
+  // body is not read ahead: kAsciiReserve.
+  size_t PlausibleCount(const PlyElement& element) const {
+    if (!binary_) return kAsciiReserve;
+    size_t min_bytes = 0;
+    for (const PlyProperty& p : element.properties) min_bytes += PlyTypeSize(p.is_list ? p.count_type : p.type);
+    return static_cast<size_t>(end_ - cursor_) / std::max<size_t>(min_bytes, 1);
+  }
+
+  // The length of a list as read: a whole number the rest of the data can hold (in
+  // binary, n items of `type`; in ascii, n values on the rest of the line).
+  size_t ListLength(double count, PlyType type, const std::optional<AsciiLine>& ascii,
+                    const std::string& context) const {
+    const double fits = binary_ ? static_cast<double>(end_ - cursor_) / static_cast<double>(PlyTypeSize(type))
+                                : static_cast<double>(ascii->Left());
+    if (!(count >= 0 && count == std::floor(count) && count <= fits)) {
+      Fail(src_, context + ": bad list length " + FormatNumber(count) + " (the data left holds " +
+                     FormatNumber(std::floor(fits)) + ")");
+    }
+    return static_cast<size_t>(count);
   }
 
   // Reads instance i of `element`: its scalars into values_ (in property order) and the
@@ -452,12 +491,7 @@ class PlyReader {
         values_[p] = ReadScalar(prop.type, ascii, context);
         continue;
       }
-      const double count = ReadScalar(prop.count_type, ascii, context);
-      if (count < 0 || count != std::floor(count)) {
-        Fail(src_, context + ": bad list length " + std::to_string(count));
-      }
-      const size_t n = static_cast<size_t>(count);
-      CheckListFits(n, prop.type, context);
+      const size_t n = ListLength(ReadScalar(prop.count_type, ascii, context), prop.type, ascii, context);
       if (layout.is_face && static_cast<int>(p) == layout.face_list) {
         list_.resize(n);
         for (size_t k = 0; k < n; ++k) list_[k] = ReadScalar(prop.type, ascii, context);
@@ -467,17 +501,6 @@ class PlyReader {
     }
     if (ascii && !ascii->AtEnd()) {
       Fail(src_, "line " + std::to_string(line_number_) + ": too many values for " + context);
-    }
-  }
-
-  // A list of n items must fit in what is left (binary) or on its line (ascii, 2 bytes
-  // per value) before a list of that size is allocated.
-  void CheckListFits(size_t n, PlyType type, const std::string& context) const {
-    const size_t left = binary_ ? static_cast<size_t>(end_ - cursor_) / PlyTypeSize(type)
-                                : line_.size() / 2 + 1;
-    if (n > left) {
-      Fail(src_, context + ": list of " + std::to_string(n) + " values runs past the " +
-                     (binary_ ? "end of the file" : "end of its line"));
     }
   }
 
@@ -518,7 +541,7 @@ class PlyReader {
         case VertexSlot::kGreen: rgb.y() = static_cast<float>(v); break;
         case VertexSlot::kBlue: rgb.z() = static_cast<float>(v); break;
         case VertexSlot::kSigma: sigma = static_cast<float>(v); break;
-        case VertexSlot::kViews: views = static_cast<int>(v); break;
+        case VertexSlot::kViews: views = IntValue(v, context, "views"); break;
       }
     }
     if (!xyz.allFinite()) Fail(src_, context + ": coordinate is not finite");
@@ -535,17 +558,16 @@ class PlyReader {
   void StoreFace(const ElementLayout& layout, const std::string& context) {
     if (list_.size() < 3) return;  // a point or a segment: no area, no triangle
     for (double index : list_) {
-      if (index < 0 || index >= static_cast<double>(mesh_.vertices.size()) || !have_xyz_) {
-        Fail(src_, context + ": vertex index " + std::to_string(static_cast<long long>(index)) +
-                       " out of range (" + std::to_string(mesh_.vertices.size()) + " vertices)");
+      if (!(index >= 0 && index < static_cast<double>(mesh_.vertices.size())) || !have_xyz_) {
+        Fail(src_, context + ": vertex index " + FormatNumber(index) + " out of range (" +
+                       std::to_string(mesh_.vertices.size()) + " vertices)");
       }
     }
+    const int label = layout.face_label >= 0 ? IntValue(values_[layout.face_label], context, "label") : 0;
     for (size_t k = 1; k + 1 < list_.size(); ++k) {
       mesh_.faces.emplace_back(static_cast<int>(list_[0]), static_cast<int>(list_[k]),
                                static_cast<int>(list_[k + 1]));
-      if (layout.face_label >= 0) {
-        mesh_.face_labels.push_back(static_cast<int>(values_[layout.face_label]));
-      }
+      if (layout.face_label >= 0) mesh_.face_labels.push_back(label);
     }
   }
 
@@ -566,6 +588,14 @@ class PlyReader {
       for (auto& c : mesh_.colors) c *= 255.0f;
     }
   }
+
+  // An integer property (views, label) as int; values outside int's range are an error.
+  int IntValue(double value, const std::string& context, const std::string& what) const {
+    if (value >= INT32_MIN && value <= INT32_MAX) return static_cast<int>(value);
+    Fail(src_, context + ": " + what + " " + FormatNumber(value) + " is out of range");
+  }
+
+  static constexpr size_t kAsciiReserve = size_t{1} << 16;
 
   std::istream& in_;
   const std::string& src_;

@@ -20,6 +20,7 @@ PACKAGES=(
   view3dscene                              # tovrmlx3d: reads the .wrl products (validate-products.sh)
   libgdal-dev                              # GeoTIFF orthophoto and DSM (io/raster_io)
   universal-ctags                          # function extents for scripts/check_lengths.sh
+  clang libclang-rt-14-dev                 # libFuzzer and its sanitizers (scripts/fuzz.sh)
 )
 
 export DEBIAN_FRONTEND=noninteractive
