@@ -10,12 +10,15 @@
 #include <functional>
 #include <iostream>
 #include <memory>
+#include <new>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "apps/memory_preflight.h"
 #include "apps/reconstruct_options.h"
+#include "engine/pipeline/memory_estimate.h"
 #include "engine/pipeline/products.h"
 #include "engine/pipeline/reconstruction.h"
 #include "engine/pipeline/radiometry_choice.h"
@@ -67,6 +70,8 @@ void ChooseOptions(const ImageBlock& block, ReconstructCommandLine* line, const 
     say("scene: " + ScenePresetName(preset) + " (given)");
   }
   line->app.scene = preset;
+  ApplySceneAndGivenOptions(preset, line);  // the options the memory check sees, before any pixel is read
+  CheckRunMemory(block, *line, say);
   std::function<void(ReconstructionOptions*)> from_data;
   if (!OptionGiven(*line, "--radiometry")) {
     const RadiometryChoice radiometry = ChooseRadiometry(block);
@@ -79,18 +84,13 @@ void ChooseOptions(const ImageBlock& block, ReconstructCommandLine* line, const 
 }
 
 // Level images in memory while they fit the budget, else tiled on disk and read per
-// window (pyramid: 4/3 of the finest kept level; float per channel).
+// window (the kept levels, float per channel).
 void PlaceLevelImages(const ImageBlock& block, const ReconstructAppSettings& app, ReconstructionOptions* options,
                       const Say& say) {
-  double pyramid_mb = 0.0;
-  for (const auto& image : block.images) {
-    const Camera& camera = block.CameraOf(image);
-    pyramid_mb += 4.0 / 3.0 * std::pow(0.25, options->finest_level) * camera.width * camera.height *
-                  (options->colour ? 3 : 1) * 4.0 / (1024.0 * 1024.0);
-  }
+  const double pyramid_mb = LevelImagesMb(block, *options);
   if (app.tiled_images || pyramid_mb > app.image_memory_mb) {
     options->image_cache_dir = (std::filesystem::path(app.out) / ".image-cache").string();
-    options->image_cache_mb = std::max(64.0, 0.5 * app.image_memory_mb);
+    options->image_cache_mb = TileCacheMb(app.image_memory_mb);
     say("level images: " + std::to_string(static_cast<int>(pyramid_mb)) + " MB, read per window from tiled files");
   }
 }
@@ -165,14 +165,15 @@ void WriteRunProducts(const Reconstruction& result, const ImageBlock& block, con
       std::to_string(finest.sigma0) + " grey values, " + std::to_string(seconds) + " s; products in " + app.out);
 }
 
-void RunReconstruct(const CLI::App& sub, ReconstructCommandLine* line) {
+void RunReconstruct(const CLI::App& sub, ReconstructCommandLine* line, std::string* stage) {
   const auto start = std::chrono::steady_clock::now();
   const ReconstructAppSettings& app = line->app;
   std::filesystem::create_directories(app.out);
   std::ostringstream log;
-  const Say say = [&log](const std::string& text) {
+  const Say say = [&log, stage](const std::string& text) {
     std::cout << text << "\n" << std::flush;
     log << text << "\n";
+    if (text.rfind("stage ", 0) == 0 || text.rfind("reading ", 0) == 0) *stage = text;
   };
   std::unique_ptr<tbb::global_control> threads;
   if (app.threads > 0) {
@@ -199,8 +200,12 @@ void AddReconstructCommand(CLI::App& app) {
   sub->fallthrough();
   BindReconstructOptions(sub, line.get());
   sub->callback([line, sub] {
+    std::string stage = "start";  // the last stage announced, for an out-of-memory error
     try {
-      RunReconstruct(*sub, line.get());
+      RunReconstruct(*sub, line.get(), &stage);
+    } catch (const std::bad_alloc&) {
+      std::cerr << "facets reconstruct: error: " << OutOfMemoryMessage(stage) << "\n";
+      throw CLI::RuntimeError(1);
     } catch (const std::exception& e) {
       std::cerr << "facets reconstruct: error: " << e.what() << "\n";
       throw CLI::RuntimeError(1);
