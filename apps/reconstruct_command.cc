@@ -11,13 +11,16 @@
 #include <iostream>
 #include <memory>
 #include <mutex>
+#include <new>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "apps/option_binder.h"
+#include "apps/memory_preflight.h"
 #include "apps/reconstruct_options.h"
+#include "engine/pipeline/memory_estimate.h"
 #include "engine/pipeline/products.h"
 #include "engine/pipeline/reconstruction.h"
 #include "engine/pipeline/radiometry_choice.h"
@@ -42,15 +45,22 @@ class RunLog {
   void Add(const std::string& line) {
     std::lock_guard<std::mutex> lock(mutex_);
     text_ += line + "\n";
+    if (line.rfind("stage ", 0) == 0 || line.rfind("reading ", 0) == 0) stage_ = line;
   }
   std::string Text() const {
     std::lock_guard<std::mutex> lock(mutex_);
     return text_;
   }
+  // The last stage announced, for an out-of-memory error.
+  std::string Stage() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return stage_;
+  }
 
  private:
   mutable std::mutex mutex_;
   std::string text_;
+  std::string stage_ = "start";
 };
 
 ImageBlock ReadBlock(const ReconstructAppSettings& app, const Say& say) {
@@ -89,6 +99,8 @@ void ChooseOptions(const ImageBlock& block, ReconstructCommandLine* line, const 
     say("scene: " + ScenePresetName(preset) + " (given)");
   }
   line->app.scene = preset;
+  ApplySceneAndGivenOptions(preset, line);  // the options the memory check sees, before any pixel is read
+  CheckRunMemory(block, *line, say);
   std::function<void(ReconstructionOptions*)> from_data;
   if (!OptionGiven(*line, "--radiometry")) {
     const RadiometryChoice radiometry = ChooseRadiometry(block);
@@ -101,18 +113,13 @@ void ChooseOptions(const ImageBlock& block, ReconstructCommandLine* line, const 
 }
 
 // Level images in memory while they fit the budget, else tiled on disk and read per
-// window (pyramid: 4/3 of the finest kept level; float per channel).
+// window (the kept levels, float per channel).
 void PlaceLevelImages(const ImageBlock& block, const ReconstructAppSettings& app, const std::string& dir,
                       ReconstructionOptions* options, const Say& say) {
-  double pyramid_mb = 0.0;
-  for (const auto& image : block.images) {
-    const Camera& camera = block.CameraOf(image);
-    pyramid_mb += 4.0 / 3.0 * std::pow(0.25, options->finest_level) * camera.width * camera.height *
-                  (options->colour ? 3 : 1) * 4.0 / (1024.0 * 1024.0);
-  }
+  const double pyramid_mb = LevelImagesMb(block, *options);
   if (app.tiled_images || pyramid_mb > app.image_memory_mb) {
     options->image_cache_dir = (std::filesystem::path(dir) / ".image-cache").string();
-    options->image_cache_mb = std::max(64.0, 0.5 * app.image_memory_mb);
+    options->image_cache_mb = TileCacheMb(app.image_memory_mb);
     say("level images: " + std::to_string(static_cast<int>(pyramid_mb)) + " MB, read per window from tiled files");
   }
 }
@@ -243,9 +250,10 @@ void RunReconstruct(const CLI::App& sub, ReconstructCommandLine* line) {
       std::filesystem::remove(out + ".failed.log", ignored);
     });
   } catch (const std::exception& e) {
+    const bool memory = dynamic_cast<const std::bad_alloc*>(&e) != nullptr;
     stop.Finish([&] {
       output.Abandon();
-      ReportFailure(out, log, output.InFinalNames(e.what()));
+      ReportFailure(out, log, memory ? OutOfMemoryMessage(log.Stage()) : output.InFinalNames(e.what()));
     });
     throw CLI::RuntimeError(1);
   }

@@ -12,31 +12,63 @@
 
 namespace facets {
 
-void WriteTiledFloatImage(const std::string& path, const ImagePlanes& image) {
-  auto out = OIIO::ImageOutput::create("tiff");
-  if (!out) throw std::runtime_error(path + ": no TIFF writer: " + OIIO::geterror());
-  OIIO::ImageSpec spec(image.width, image.height, image.channels, OIIO::TypeDesc::FLOAT);
-  spec.tile_width = 64;
-  spec.tile_height = 64;
+struct TiledFloatImageWriter::Output {
+  std::unique_ptr<OIIO::ImageOutput> get;
+};
+
+TiledFloatImageWriter::TiledFloatImageWriter(const std::string& path, int width, int height, int channels)
+    : out_(std::make_unique<Output>()), path_(path), tmp_(CreateTemporaryBeside(path)), width_(width), height_(height),
+      channels_(channels) {
+  out_->get = OIIO::ImageOutput::create("tiff");
+  if (!out_->get) {
+    RemoveTemporary(tmp_);
+    throw std::runtime_error(path + ": no TIFF writer: " + OIIO::geterror());
+  }
+  OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::FLOAT);
+  spec.tile_width = kTileSize;
+  spec.tile_height = kTileSize;
   spec.attribute("compression", "none");  // read back many times, written once
-  const std::string tmp = CreateTemporaryBeside(path);
-  if (!out->open(tmp, spec)) {
-    RemoveTemporary(tmp);
-    throw std::runtime_error(path + ": " + out->geterror());
+  if (!out_->get->open(tmp_, spec)) {
+    RemoveTemporary(tmp_);
+    throw std::runtime_error(path + ": " + out_->get->geterror());
   }
-  // Plane-major memory to the file's interleaved channels (a level image is small
-  // against the original, one interleaved copy is fine).
-  const size_t plane = static_cast<size_t>(image.width) * image.height;
-  std::vector<float> interleaved(plane * image.channels);
-  for (int c = 0; c < image.channels; ++c) {
-    for (size_t i = 0; i < plane; ++i) interleaved[i * image.channels + c] = image.data[c * plane + i];
+  band_.resize(static_cast<size_t>(kTileSize) * width * channels);
+}
+
+TiledFloatImageWriter::~TiledFloatImageWriter() {
+  if (!out_->get) return;  // closed
+  out_->get->close();
+  RemoveTemporary(tmp_);
+}
+
+void TiledFloatImageWriter::AddRow(const float* row) {
+  if (rows_ >= height_) throw std::logic_error(path_ + ": more rows than the image has");
+  float* interleaved = band_.data() + static_cast<size_t>(rows_ % kTileSize) * width_ * channels_;
+  for (int c = 0; c < channels_; ++c)
+    for (int x = 0; x < width_; ++x) interleaved[x * channels_ + c] = row[c * width_ + x];
+  ++rows_;
+  if (rows_ % kTileSize != 0 && rows_ != height_) return;
+  const int band_y0 = (rows_ - 1) / kTileSize * kTileSize;
+  if (!out_->get->write_tiles(0, width_, band_y0, rows_, 0, 1, OIIO::TypeDesc::FLOAT, band_.data())) {
+    throw std::runtime_error(path_ + ": cannot write: " + out_->get->geterror());
   }
-  if (!out->write_image(OIIO::TypeDesc::FLOAT, interleaved.data()) || !out->close()) {
-    const std::string error = out->geterror();
-    RemoveTemporary(tmp);
-    throw std::runtime_error(path + ": cannot write: " + error);
+}
+
+void TiledFloatImageWriter::Close() {
+  if (rows_ != height_) throw std::logic_error(path_ + ": closed after " + std::to_string(rows_) + " rows");
+  if (!out_->get->close()) throw std::runtime_error(path_ + ": cannot write: " + out_->get->geterror());
+  out_->get.reset();
+  CommitTemporary(tmp_, path_);
+}
+
+void WriteTiledFloatImage(const std::string& path, const ImagePlanes& image) {
+  TiledFloatImageWriter writer(path, image.width, image.height, image.channels);
+  std::vector<float> row(static_cast<size_t>(image.width) * image.channels);
+  for (int y = image.y0; y < image.y0 + image.height; ++y) {
+    image.GetRow(y, row.data());
+    writer.AddRow(row.data());
   }
-  CommitTemporary(tmp, path);
+  writer.Close();
 }
 
 struct TiledImageReader::Cache {

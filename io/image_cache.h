@@ -7,12 +7,40 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "io/image_io.h"
 
 namespace facets {
 
-// Writes a tiled (64 x 64) float TIFF, one channel per plane (temporary name + rename).
+// Side of the square tiles of the files written here, pixels.
+constexpr int kTileSize = 64;
+
+// A tiled float TIFF written row by row: rows are held until a band of tiles is complete,
+// so a large level image never has to be whole in memory. Written under a temporary
+// name, renamed into place by Close(); a writer destroyed before Close() removes it.
+class TiledFloatImageWriter {
+ public:
+  TiledFloatImageWriter(const std::string& path, int width, int height, int channels);
+  ~TiledFloatImageWriter();
+  TiledFloatImageWriter(const TiledFloatImageWriter&) = delete;
+  TiledFloatImageWriter& operator=(const TiledFloatImageWriter&) = delete;
+
+  // The next row, channel-major: row[c * width + x].
+  void AddRow(const float* row);
+  // After the last row. Throws std::runtime_error naming the file.
+  void Close();
+
+ private:
+  struct Output;  // OpenImageIO's ImageOutput, kept out of this header
+  std::unique_ptr<Output> out_;
+  std::string path_, tmp_;
+  int width_ = 0, height_ = 0, channels_ = 0;
+  int rows_ = 0;             // rows added
+  std::vector<float> band_;  // the rows of the current band of tiles, interleaved
+};
+
+// Writes a tiled float TIFF, one channel per plane (temporary name + rename).
 void WriteTiledFloatImage(const std::string& path, const ImagePlanes& image);
 
 class TiledImageReader {

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <stdexcept>
+#include <vector>
 
 namespace facets {
 namespace {
@@ -40,6 +42,21 @@ TEST(TiledImages, RegionsReadBackExactly) {
   }
   EXPECT_GT(reader.MemoryMb(), 0.0);
   EXPECT_THROW(reader.Read(testing::TempDir() + "/facets_no_such.tif", 0, 0, 4, 4), std::runtime_error);
+}
+
+// A writer given fewer rows than the image has refuses to close and, destroyed, leaves
+// neither the file nor its temporary.
+TEST(TiledImages, AnUnfinishedFileIsRemoved) {
+  const std::string path = testing::TempDir() + "/facets_tiled_unfinished.tif";
+  std::filesystem::remove(path);
+  {
+    TiledFloatImageWriter writer(path, 100, 70, 2);
+    const std::vector<float> row(200, 1.0f);
+    for (int y = 0; y < 69; ++y) writer.AddRow(row.data());
+    EXPECT_THROW(writer.Close(), std::logic_error);
+  }
+  EXPECT_FALSE(std::filesystem::exists(path));
+  EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
 }
 
 }  // namespace

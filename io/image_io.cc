@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <stdexcept>
 
 #include "io/atomic_file.h"
@@ -22,31 +23,93 @@ std::string Lower(std::string s) {
   return s;
 }
 
+// Rows [y0, y1) of the open image, in the file's own type T (so values stay on its grey
+// scale: OIIO would normalise integers to 0..1 when converting to float), into rows
+// [y0, y1) of *image (plane-major, image->y0 = first row held).
 template <typename T>
-void Deinterleave(const std::vector<T>& interleaved, ImagePlanes* image) {
-  const size_t plane = static_cast<size_t>(image->width) * image->height;
+void ReadRowsAs(OIIO::ImageInput* in, OIIO::TypeDesc type, const std::string& path, int y0, int y1,
+                ImagePlanes* image) {
+  const size_t row = static_cast<size_t>(image->width) * image->channels;
+  std::vector<T> interleaved(row * (y1 - y0));
+  // A decoder that meets corrupt data may still return true and fill the rest with zeros
+  // (libtiff on a damaged deflate strip); its error is then only in has_error().
+  if (!in->read_scanlines(0, 0, y0, y1, 0, 0, image->channels, type, interleaved.data()) || in->has_error()) {
+    const std::string error = in->geterror();
+    throw std::runtime_error(path + ": cannot decode the pixels of rows " + std::to_string(y0) + " to " +
+                             std::to_string(y1) + " (corrupt or truncated file)" +
+                             (error.empty() ? std::string() : ": " + error));
+  }
   const int channels = image->channels;
   for (int c = 0; c < channels; ++c) {
-    float* out = image->data.data() + c * plane;
-    for (size_t i = 0; i < plane; ++i) out[i] = static_cast<float>(interleaved[i * channels + c]);
+    for (int y = y0; y < y1; ++y) {
+      float* out = image->Row(c, y);
+      const T* in_row = interleaved.data() + (y - y0) * row;
+      for (int x = 0; x < image->width; ++x) out[x] = static_cast<float>(in_row[x * channels + c]);
+    }
   }
 }
 
-// Reads the whole image in the file's own type. A decoder that meets corrupt data may
-// still return true and fill the rest with zeros (libtiff on a damaged deflate strip);
-// its error is then only in has_error(), so that is an error here too.
-template <typename T>
-void ReadAs(OIIO::ImageInput* in, OIIO::TypeDesc type, const std::string& path,
-            ImagePlanes* image) {
-  std::vector<T> interleaved(static_cast<size_t>(image->width) * image->height *
-                             image->channels);
-  const bool read = in->read_image(0, 0, 0, image->channels, type, interleaved.data());
-  if (!read || in->has_error()) {
-    const std::string error = in->geterror();
-    throw std::runtime_error(path + ": cannot decode the pixels (corrupt or truncated file)" +
-                             (error.empty() ? std::string() : ": " + error));
+void ReadRows(OIIO::ImageInput* in, const std::string& path, int y0, int y1, ImagePlanes* image) {
+  switch (image->bits) {
+    case 8:
+      return ReadRowsAs<uint8_t>(in, OIIO::TypeDesc::UINT8, path, y0, y1, image);
+    case 16:
+      if (in->spec().format.basetype == OIIO::TypeDesc::INT16) {
+        return ReadRowsAs<int16_t>(in, OIIO::TypeDesc::INT16, path, y0, y1, image);
+      }
+      return ReadRowsAs<uint16_t>(in, OIIO::TypeDesc::UINT16, path, y0, y1, image);
+    default:
+      return ReadRowsAs<float>(in, OIIO::TypeDesc::FLOAT, path, y0, y1, image);
   }
-  Deinterleave(interleaved, image);
+}
+
+// The open file's size and bit depth; throws naming the file for an image without
+// pixels or of an unsupported pixel type.
+ImageHeader HeaderOf(const OIIO::ImageSpec& spec, const std::string& path) {
+  ImageHeader header;
+  header.width = spec.width;
+  header.height = spec.height;
+  header.channels = spec.nchannels;
+  if (header.width <= 0 || header.height <= 0 || header.channels <= 0) {
+    throw std::runtime_error(path + ": image has no pixels");
+  }
+  switch (spec.format.basetype) {
+    case OIIO::TypeDesc::UINT8:
+      header.bits = 8;
+      break;
+    case OIIO::TypeDesc::UINT16:
+    case OIIO::TypeDesc::INT16:
+      header.bits = 16;
+      break;
+    case OIIO::TypeDesc::HALF:
+    case OIIO::TypeDesc::FLOAT:
+    case OIIO::TypeDesc::DOUBLE:
+      header.bits = 32;
+      break;
+    default:
+      throw std::runtime_error(path + ": unsupported pixel type " + std::string(spec.format.c_str()) +
+                               " (8/16-bit integer or float expected)");
+  }
+  return header;
+}
+
+std::unique_ptr<OIIO::ImageInput> OpenImage(const std::string& path) {
+  CheckInputFile(path, "image file");
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) throw std::runtime_error(path + ": cannot read image: " + OIIO::geterror());
+  return in;
+}
+
+// An empty image of the header's size holding rows [y0, y0 + rows).
+ImagePlanes RowsOf(const ImageHeader& header, int y0, int rows) {
+  ImagePlanes image;
+  image.width = header.width;
+  image.height = rows;
+  image.channels = header.channels;
+  image.bits = header.bits;
+  image.y0 = y0;
+  image.data.resize(static_cast<size_t>(header.width) * rows * header.channels);
+  return image;
 }
 
 template <typename T>
@@ -72,6 +135,8 @@ ImagePlanes ImagePlanes::Grey() const {
   grey.height = height;
   grey.channels = 1;
   grey.bits = bits;
+  grey.x0 = x0;
+  grey.y0 = y0;
   const size_t plane = static_cast<size_t>(width) * height;
   grey.data.assign(plane, 0.0f);
   if (channels == 0) return grey;
@@ -84,68 +149,65 @@ ImagePlanes ImagePlanes::Grey() const {
   return grey;
 }
 
-namespace {
+void ImagePlanes::GetRow(int y, float* row) const {
+  for (int c = 0; c < channels; ++c) std::copy_n(Row(c, y), width, row + static_cast<size_t>(c) * width);
+}
 
-// Reads `path`; when `expected` is given, its size is checked against the camera's before
-// any pixel is read (a wrong or damaged header must not size an allocation).
-ImagePlanes ReadImageChecked(const std::string& path, const Camera* expected) {
-  CheckInputFile(path, "image file");
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) {
-    throw std::runtime_error(path + ": cannot read image: " + OIIO::geterror());
-  }
-  const OIIO::ImageSpec& spec = in->spec();
-  ImagePlanes image;
-  image.width = spec.width;
-  image.height = spec.height;
-  image.channels = spec.nchannels;
-  if (image.width <= 0 || image.height <= 0 || image.channels <= 0) {
-    throw std::runtime_error(path + ": image has no pixels");
-  }
-  if (expected != nullptr && (image.width != expected->width || image.height != expected->height)) {
-    throw std::runtime_error(path + ": image is " + std::to_string(image.width) + "x" +
-                             std::to_string(image.height) + " pixels but camera " +
-                             std::to_string(expected->camera_id) + " expects " +
-                             std::to_string(expected->width) + "x" +
-                             std::to_string(expected->height));
-  }
-  image.data.resize(static_cast<size_t>(image.width) * image.height * image.channels);
-  // Read in the file's own type so values stay on its grey scale (OIIO would normalise
-  // integers to 0..1 when converting to float).
-  switch (spec.format.basetype) {
-    case OIIO::TypeDesc::UINT8:
-      image.bits = 8;
-      ReadAs<uint8_t>(in.get(), OIIO::TypeDesc::UINT8, path, &image);
-      break;
-    case OIIO::TypeDesc::UINT16:
-      image.bits = 16;
-      ReadAs<uint16_t>(in.get(), OIIO::TypeDesc::UINT16, path, &image);
-      break;
-    case OIIO::TypeDesc::INT16:
-      image.bits = 16;
-      ReadAs<int16_t>(in.get(), OIIO::TypeDesc::INT16, path, &image);
-      break;
-    case OIIO::TypeDesc::HALF:
-    case OIIO::TypeDesc::FLOAT:
-    case OIIO::TypeDesc::DOUBLE:
-      image.bits = 32;
-      ReadAs<float>(in.get(), OIIO::TypeDesc::FLOAT, path, &image);
-      break;
-    default:
-      throw std::runtime_error(path + ": unsupported pixel type " +
-                               std::string(spec.format.c_str()) +
-                               " (8/16-bit integer or float expected)");
-  }
+void ImagePlanes::SetRow(int y, const float* row) {
+  for (int c = 0; c < channels; ++c) std::copy_n(row + static_cast<size_t>(c) * width, width, Row(c, y));
+}
+
+ImageHeader ReadImageHeader(const std::string& path) {
+  auto in = OpenImage(path);
+  return HeaderOf(in->spec(), path);
+}
+
+ImagePlanes ReadImage(const std::string& path) {
+  auto in = OpenImage(path);
+  const ImageHeader header = HeaderOf(in->spec(), path);
+  ImagePlanes image = RowsOf(header, 0, header.height);
+  ReadRows(in.get(), path, 0, header.height, &image);
   in->close();
   return image;
 }
 
-}  // namespace
+void ForEachImageStrip(const std::string& path, int rows, int overlap,
+                       const std::function<void(const ImagePlanes&)>& strip) {
+  if (rows < 1 || overlap < 0 || overlap >= rows) {
+    throw std::invalid_argument(path + ": strips need rows >= 1 and 0 <= overlap < rows");
+  }
+  auto in = OpenImage(path);
+  const ImageHeader header = HeaderOf(in->spec(), path);
+  ImagePlanes previous;
+  for (int y0 = 0; y0 < header.height; y0 += rows - overlap) {
+    const int held = std::min(rows, header.height - y0);
+    ImagePlanes current = RowsOf(header, y0, held);
+    // The rows shared with the previous strip are copied, not read again: readers of
+    // sequential formats (JPEG) would decode the file from its start to go back.
+    const int shared = y0 > 0 ? std::min(overlap, held) : 0;
+    for (int c = 0; c < header.channels && shared > 0; ++c) {
+      std::copy_n(previous.Row(c, y0), static_cast<size_t>(header.width) * shared, current.Row(c, y0));
+    }
+    ReadRows(in.get(), path, y0 + shared, y0 + held, &current);
+    strip(current);
+    if (y0 + held >= header.height) break;
+    previous = std::move(current);
+  }
+  in->close();
+}
 
-ImagePlanes ReadImage(const std::string& path) { return ReadImageChecked(path, nullptr); }
-
+// The camera's size is checked against the header before any pixel is read: a wrong or
+// damaged header must not size an allocation.
 ImagePlanes ReadImageFor(const std::string& path, const Camera& camera) {
-  return ReadImageChecked(path, &camera);
+  const ImageHeader image = ReadImageHeader(path);
+  if (image.width != camera.width || image.height != camera.height) {
+    throw std::runtime_error(path + ": image is " + std::to_string(image.width) + "x" +
+                             std::to_string(image.height) + " pixels but camera " +
+                             std::to_string(camera.camera_id) + " expects " +
+                             std::to_string(camera.width) + "x" +
+                             std::to_string(camera.height));
+  }
+  return ReadImage(path);
 }
 
 void WriteImage(const std::string& path, const ImagePlanes& image, int bits) {

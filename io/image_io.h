@@ -2,6 +2,7 @@
 // the file is used: EXIF orientation is NOT applied (the data sets are normalised).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,14 @@ struct ImagePlanes {
   float at(int c, int x, int y) const;
   // Mean over channels into one grey plane.
   ImagePlanes Grey() const;
+  // The first stored pixel of row y (whole-image index) of channel c.
+  const float* Row(int c, int y) const {
+    return data.data() + (static_cast<size_t>(c) * height + (y - y0)) * width;
+  }
+  float* Row(int c, int y) { return data.data() + (static_cast<size_t>(c) * height + (y - y0)) * width; }
+  // Row y (whole-image index) channel-major: row[c * width + x], width * channels floats.
+  void GetRow(int y, float* row) const;
+  void SetRow(int y, const float* row);
 };
 
 // Inline: called once per pixel ray in the inner loops.
@@ -35,7 +44,21 @@ inline float ImagePlanes::at(int c, int x, int y) const {
   return data[(static_cast<size_t>(c) * height + (y - y0)) * width + (x - x0)];
 }
 
+// Size, channels and bit depth from the file's header (no pixels decoded).
+struct ImageHeader {
+  int width = 0, height = 0, channels = 0;
+  int bits = 8;  // 8, 16, or 32 for float
+};
+ImageHeader ReadImageHeader(const std::string& path);
+
 ImagePlanes ReadImage(const std::string& path);          // via OpenImageIO
+// The image top to bottom in strips of `rows` full-width rows (ImagePlanes::y0 = the
+// strip's first row; the last strip may be shorter), each strip starting `overlap` rows
+// before the end of the previous one, so that any `overlap + 1` consecutive rows lie in
+// one strip. Memory: one strip and its rows in the file's type, not the whole image.
+// Errors name the file.
+void ForEachImageStrip(const std::string& path, int rows, int overlap,
+                       const std::function<void(const ImagePlanes&)>& strip);
 // Reads and checks width/height against the camera; error names file, both sizes.
 ImagePlanes ReadImageFor(const std::string& path, const Camera& camera);
 // Writes via OpenImageIO (format from extension: .png .tif .jpg ...); bits 8 or 16

@@ -154,6 +154,32 @@ TEST_F(ImageIoTest, ReadsRgbAndMultiChannel) {
   }
 }
 
+// The header gives size, channels and depth; strips with an overlap give every row of
+// the image exactly, each strip starting `overlap` rows before the previous one ends.
+TEST_F(ImageIoTest, HeaderAndStripsMatchTheWholeImage) {
+  const auto expected = WriteWithOiio<uint16_t>(Path("strips.png"), 23, 130, 3, OIIO::TypeDesc::UINT16, 65535);
+  const ImageHeader header = ReadImageHeader(Path("strips.png"));
+  EXPECT_EQ(header.width, 23);
+  EXPECT_EQ(header.height, 130);
+  EXPECT_EQ(header.channels, 3);
+  EXPECT_EQ(header.bits, 16);
+  std::vector<int> starts, heights;
+  int wrong = 0;
+  ForEachImageStrip(Path("strips.png"), 50, 4, [&](const ImagePlanes& strip) {
+    starts.push_back(strip.y0);
+    heights.push_back(strip.height);
+    EXPECT_EQ(strip.bits, 16);
+    for (int c = 0; c < 3; ++c)
+      for (int y = strip.y0; y < strip.y0 + strip.height; ++y)
+        for (int x = 0; x < strip.width; ++x) wrong += strip.at(c, x, y) != expected.at(c, x, y);
+  });
+  EXPECT_EQ(starts, (std::vector<int>{0, 46, 92}));
+  EXPECT_EQ(heights, (std::vector<int>{50, 50, 38}));
+  EXPECT_EQ(wrong, 0);
+  EXPECT_THROW(ForEachImageStrip(Path("strips.png"), 4, 4, [](const ImagePlanes&) {}), std::invalid_argument);
+  EXPECT_THROW(ReadImageHeader(Path("missing.png")), std::runtime_error);
+}
+
 TEST_F(ImageIoTest, WriteImageRoundTrip) {
   ImagePlanes image;
   image.width = 33;

@@ -107,6 +107,7 @@ TEST(ReconstructCli, ScenePresetSetsItsOptionsAndGivenOptionsWin) {
   };
   const std::string aerial = log_of("aerial", " --scene aerial --keep-levels");
   EXPECT_NE(aerial.find("scene: aerial (given)"), std::string::npos) << aerial;
+  EXPECT_NE(aerial.find("memory estimate: "), std::string::npos) << aerial;
   for (const char* set : {"v-cycles=1", "facet-pixels=1.5", "wall-corners=true", "wall-feet=true", "wall-eaves=true"}) {
     EXPECT_NE(aerial.find(set), std::string::npos) << set << "\n" << aerial;
   }
@@ -138,6 +139,31 @@ TEST(ReconstructCli, ScenePresetSetsItsOptionsAndGivenOptionsWin) {
   const std::string one = FileText(dir / "one" / "facets.log");
   EXPECT_NE(one.find("stage v-cycle 1/1"), std::string::npos) << one;
   EXPECT_EQ(one.find("stage v-cycle 1/2"), std::string::npos) << one;
+}
+
+// A job whose estimate exceeds the address space allowed (ulimit -v) stops before any
+// pixel is read, with the estimate, the limit and what to change, and writes no products.
+TEST(ReconstructCli, AJobThatCannotFitStopsAtOnceWithTheEstimate) {
+  const fs::path dir = fs::path(testing::TempDir()) / "facets_reconstruct_cli_memory";
+  fs::remove_all(dir);
+  const std::string scene = std::string(FACETS_SOURCE_DIR) + "/scenes/data/seed_gable_parallel.json";
+  ASSERT_EQ(Facets("render " + scene + " --out " + (dir / "scene").string()), 0);
+  // 1 km x 1 km at the gable's 0.24 m ground pixel: about half a million TIN vertices.
+  const std::string command = "ulimit -v 3000000; " + std::string(FACETS_CLI) + " reconstruct --colmap " +
+                              (dir / "scene" / "sparse").string() + " --images " + (dir / "scene" / "images").string() +
+                              " --roi -500 -500 0 500 500 9 --out " + (dir / "run").string() + " > " +
+                              (dir / "out.txt").string() + " 2> " + (dir / "err.txt").string();
+  const int status = std::system(command.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 1);
+  const std::string err = FileText(dir / "err.txt"), out = FileText(dir / "out.txt");
+  std::cout << err;
+  for (const char* part : {"memory estimate: ", "normal equations ", "available ", "RLIMIT_AS", "does not fit",
+                           "--roi", "--finest-level 1"}) {
+    EXPECT_NE(err.find(part), std::string::npos) << part << "\n" << err;
+  }
+  EXPECT_EQ(out.find("stage images"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "run" / "tin.ply"));
 }
 
 }  // namespace

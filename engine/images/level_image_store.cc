@@ -2,14 +2,30 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <filesystem>
-#include <mutex>
+#include <memory>
+#include <new>
 #include <stdexcept>
 #include <string>
 
 #include "visibility/image_selection.h"
 
 namespace facets {
+namespace {
+
+// Row y of the strip as the mean of its channels (the arithmetic of ImagePlanes::Grey).
+void GreyRow(const ImagePlanes& strip, int y, float* grey) {
+  std::fill_n(grey, strip.width, 0.0f);
+  for (int c = 0; c < strip.channels; ++c) {
+    const float* in = strip.Row(c, y);
+    for (int x = 0; x < strip.width; ++x) grey[x] += in[x];
+  }
+  const float scale = 1.0f / static_cast<float>(strip.channels);
+  for (int x = 0; x < strip.width; ++x) grey[x] *= scale;
+}
+
+}  // namespace
 
 LevelImageStore::LevelImageStore(const ImageBlock& block, const LevelImageStoreOptions& options)
     : block_(block), options_(options) {
@@ -27,17 +43,15 @@ LevelImageStore::LevelImageStore(const ImageBlock& block, const LevelImageStoreO
   }
   std::vector<int> channels(n, 1);
   tbb::parallel_for(size_t{0}, n, [&](size_t k) {
-    ImagePlanes planes = ReadImageFor(block.images[k].path, block.CameraOf(block.images[k]));
-    if (!options.colour) planes = planes.Grey();
-    channels[k] = planes.channels;
-    std::vector<ImagePlanes> pyramid = BuildPyramid(planes, options.levels, options.filter);
     cameras_[k].push_back(block.CameraOf(block.images[k]));
     for (int l = 1; l < options.levels; ++l) cameras_[k].push_back(cameras_[k].back().Scaled(0.5));
-    if (cached()) {
-      for (int l = options.first_level; l < options.levels; ++l) WriteTiledFloatImage(LevelPath(k, l), pyramid[l]);
-    } else {
-      for (int l = 0; l < options.first_level; ++l) pyramid[l] = ImagePlanes{};  // not used: freed
-      pyramids_[k] = std::move(pyramid);
+    try {
+      channels[k] = BuildLevels(k);
+    } catch (const std::bad_alloc&) {
+      const Camera& camera = cameras_[k][0];
+      throw std::runtime_error(block.images[k].path + ": out of memory building the image's pyramid (" +
+                               std::to_string(camera.width) + " x " + std::to_string(camera.height) +
+                               " pixels); lower --image-memory so that the level images go to tiled files");
     }
   });
   for (size_t k = 0; k < n; ++k) {
@@ -52,6 +66,54 @@ LevelImageStore::LevelImageStore(const ImageBlock& block, const LevelImageStoreO
     for (size_t k = 0; k < n; ++k)
       for (int l = options.first_level; l < options.levels; ++l) written_.push_back(LevelPath(k, l));
   }
+}
+
+int LevelImageStore::BuildLevels(size_t k) {
+  const std::string& path = block_.images[k].path;
+  const Camera& camera = cameras_[k][0];
+  const ImageHeader header = ReadImageHeader(path);
+  if (header.width != camera.width || header.height != camera.height) {
+    throw std::runtime_error(path + ": image is " + std::to_string(header.width) + "x" + std::to_string(header.height) +
+                             " pixels but camera " + std::to_string(camera.camera_id) + " expects " +
+                             std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  }
+  const int channels = options_.colour ? header.channels : 1;
+  // Each level's rows go to its tiled file or its plane in memory as they complete.
+  std::vector<std::unique_ptr<TiledFloatImageWriter>> files(options_.levels);
+  std::vector<ImagePlanes> levels(options_.levels);
+  for (int l = options_.first_level; l < options_.levels; ++l) {
+    const Camera& level = cameras_[k][l];
+    if (cached()) {
+      files[l] = std::make_unique<TiledFloatImageWriter>(LevelPath(k, l), level.width, level.height, channels);
+      continue;
+    }
+    levels[l].width = level.width;
+    levels[l].height = level.height;
+    levels[l].channels = channels;
+    levels[l].bits = header.bits;
+    levels[l].data.resize(static_cast<size_t>(level.width) * level.height * channels);
+  }
+  StreamingPyramid pyramid(header.width, header.height, channels, options_.levels, options_.filter,
+                           [&](int l, int y, const float* row) {
+                             if (l < options_.first_level) return;
+                             if (files[l]) files[l]->AddRow(row);
+                             else levels[l].SetRow(y, row);
+                           });
+  std::vector<float> row(static_cast<size_t>(header.width) * channels);
+  ForEachImageStrip(path, kStripRows, 0, [&](const ImagePlanes& strip) {
+    for (int y = strip.y0; y < strip.y0 + strip.height; ++y) {
+      if (channels == strip.channels) {
+        strip.GetRow(y, row.data());
+      } else {
+        GreyRow(strip, y, row.data());
+      }
+      pyramid.AddRow(row.data());
+    }
+  });
+  for (auto& file : files)
+    if (file) file->Close();
+  if (!cached()) pyramids_[k] = std::move(levels);
+  return channels;
 }
 
 LevelImageStore::~LevelImageStore() {

@@ -2,7 +2,10 @@
 // in memory, or written once as tiled float TIFFs into a cache folder and read per
 // window region through OpenImageIO's ImageCache, so that memory stays bounded by the
 // windows being adjusted instead of growing with the number and size of the images.
-// Both give the same pixels: the pyramid is built on the whole image before storing.
+// Both give the same pixels: the pyramid is built over the whole image, read in strips of
+// kStripRows rows, each level's rows stored as they complete (engine/images/pyramid.h's
+// StreamingPyramid), so reading holds a strip and the filters' rows per image, never the
+// full-resolution image (unless level 0 is kept in memory).
 #pragma once
 
 #include <Eigen/Geometry>
@@ -21,6 +24,9 @@ namespace facets {
 
 // Pixel regions a window read (cache mode); the LevelImages point into it.
 using ImageStorage = std::vector<std::unique_ptr<ImagePlanes>>;
+
+// Rows of an image decoded at a time while its pyramid is built.
+constexpr int kStripRows = 64;
 
 struct LevelImageStoreOptions {
   int levels = 1;
@@ -58,6 +64,9 @@ class LevelImageStore {
   double MemoryMb() const;
 
  private:
+  // Reads image k strip by strip into its pyramid, keeping the levels from first_level
+  // on (in memory or tiled files); returns its channels. Errors name the file.
+  int BuildLevels(size_t image);
   std::string LevelPath(size_t image, int level) const;
   void CheckLevel(int level) const;  // throws std::logic_error for a level not kept
   LevelImage Make(size_t image, int level, const ImagePlanes* pixels) const;

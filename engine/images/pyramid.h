@@ -8,6 +8,7 @@
 // offset), so that Camera::Scaled(0.5) describes the reduced image exactly.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,34 @@ enum class PyramidFilter {
 PyramidFilter PyramidFilterFromName(const std::string& name);
 // The separable 1D kernel (odd length, sums to 1).
 std::vector<double> PyramidKernel(PyramidFilter filter);
+
+// The pyramid of an image given row by row, top to bottom (level 0 = the rows given),
+// holding per level only the rows its filter spans: every row of every level goes to
+// `sink(level, y, row)` as soon as it is complete, rows of a level in order. A row is
+// channel-major: row[c * level_width + x]. Gives BuildPyramid's values to the bit.
+class StreamingPyramid {
+ public:
+  using RowSink = std::function<void(int level, int y, const float* row)>;
+  StreamingPyramid(int width, int height, int channels, int num_levels, PyramidFilter filter, RowSink sink);
+  void AddRow(const float* row);
+  // Floats held between rows (the filters' rows), for memory estimates.
+  size_t HeldFloats() const;
+
+ private:
+  struct Level {
+    int width = 0, height = 0;
+    int rows_in = 0;   // rows of this level given so far
+    int next_out = 0;  // next row of the level below to complete
+    std::vector<float> ring;  // the last kernel-size rows, reduced horizontally
+  };
+  void Add(int level, const float* row);
+
+  int channels_ = 1;
+  int half_ = 0;
+  std::vector<double> kernel_;
+  std::vector<Level> levels_;
+  RowSink sink_;
+};
 
 // One reduction step: filter separably (borders replicated), then halve. The result
 // has ceil(width/2) x ceil(height/2) pixels and the same channels and bit depth.

@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "io/camera.h"
 
@@ -68,6 +70,44 @@ TEST(Pyramid, NyquistPatternIsRemoved) {
   const ImagePlanes half = ReduceImage(image, PyramidFilter::kBinomial5);
   for (int j = 2; j < 14; ++j)
     for (int i = 2; i < 14; ++i) EXPECT_NEAR(half.at(0, i, j), 50.0, 1e-4);
+}
+
+// Row by row, each level's rows arrive once and in order, and hold the separable filter
+// (borders replicated, then the pair average) computed directly on the whole image.
+TEST(Pyramid, StreamedRowsMatchTheFilterOnTheWholeImage) {
+  for (PyramidFilter filter : {PyramidFilter::kBinomial5, PyramidFilter::kMeer13}) {
+    const int w = 37, h = 29;  // odd sizes: the last pair replicates the border
+    ImagePlanes image = Ramp(w, h, 0, 0);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) image.at(0, x, y) = static_cast<float>((x * 7 + y * 13) % 23);
+    const std::vector<double> odd = PyramidKernel(filter);
+    const int half = static_cast<int>(odd.size() / 2);
+    // The even kernel of ReduceImage: the odd one convolved with the pair average.
+    const int taps = static_cast<int>(odd.size()) + 1;
+    auto tap = [&](int k) { return 0.5 * ((k < taps - 1 ? odd[k] : 0.0) + (k > 0 ? odd[k - 1] : 0.0)); };
+    std::vector<std::vector<int>> rows(3);
+    double worst = 0.0;
+    StreamingPyramid pyramid(w, h, 1, 3, filter, [&](int level, int y, const float* row) {
+      rows[level].push_back(y);
+      if (level != 1) return;
+      for (int i = 0; i < (w + 1) / 2; ++i) {
+        double expected = 0.0;
+        for (int ky = 0; ky < taps; ++ky) {
+          const int source_y = std::clamp(2 * y - half + ky, 0, h - 1);
+          double across = 0.0;
+          for (int kx = 0; kx < taps; ++kx) across += tap(kx) * image.at(0, std::clamp(2 * i - half + kx, 0, w - 1), source_y);
+          expected += tap(ky) * static_cast<float>(across);
+        }
+        worst = std::max(worst, std::abs(expected - row[i]));
+      }
+    });
+    for (int y = 0; y < h; ++y) pyramid.AddRow(&image.at(0, 0, y));
+    for (int level = 0; level < 3; ++level) {
+      ASSERT_EQ(rows[level].size(), static_cast<size_t>(level == 0 ? 29 : level == 1 ? 15 : 8));
+      for (size_t y = 0; y < rows[level].size(); ++y) EXPECT_EQ(rows[level][y], static_cast<int>(y));
+    }
+    EXPECT_LT(worst, 1e-4);
+  }
 }
 
 }  // namespace

@@ -9,6 +9,8 @@
 #include <string>
 #include <limits>
 #include <map>
+#include <new>
+#include <stdexcept>
 #include <unordered_map>
 #include <vector>
 
@@ -115,14 +117,9 @@ std::vector<Observation> CollectObservations(const ImageBlock& block, int* point
 // Largest grey value of an image file's scale: 255 for 8 bit, 65535 for 16 bit, 1 for float.
 double FullScale(int bits) { return bits <= 16 ? std::ldexp(1.0, bits) - 1.0 : 1.0; }
 
-// Mean of the 5 x 5 pixels around xy (pixel centres at +0.5); NaN when the window leaves
-// the image or holds a clipped pixel (0 or full scale: under- or overexposed).
-double WindowMean(const ImagePlanes& grey, const Eigen::Vector2d& xy, double full_scale) {
-  const int cx = static_cast<int>(std::floor(xy.x())), cy = static_cast<int>(std::floor(xy.y()));
-  if (cx - kHalfWindow < 0 || cy - kHalfWindow < 0 || cx + kHalfWindow >= grey.width ||
-      cy + kHalfWindow >= grey.height) {
-    return std::numeric_limits<double>::quiet_NaN();
-  }
+// Mean of the 5 x 5 pixels around pixel (cx, cy), a window inside `grey` (rows of the
+// image); NaN when it holds a clipped pixel (0 or full scale: under- or overexposed).
+double WindowMean(const ImagePlanes& grey, int cx, int cy, double full_scale) {
   double sum = 0.0;
   for (int y = cy - kHalfWindow; y <= cy + kHalfWindow; ++y) {
     for (int x = cx - kHalfWindow; x <= cx + kHalfWindow; ++x) {
@@ -134,6 +131,43 @@ double WindowMean(const ImagePlanes& grey, const Eigen::Vector2d& xy, double ful
   return sum / ((2 * kHalfWindow + 1) * (2 * kHalfWindow + 1));
 }
 
+// Rows of an image read at a time: the windows are sampled strip by strip, so that a
+// large image is never decoded whole.
+constexpr int kSampleStripRows = 256;
+
+// Fills the observations' grey values from one image (windows leaving the image stay NaN);
+// returns the image's full grey scale.
+double SampleImage(const std::string& path, const Camera& camera, const std::vector<Observation*>& observations) {
+  const ImageHeader header = ReadImageHeader(path);
+  if (header.width != camera.width || header.height != camera.height) {
+    throw std::runtime_error(path + ": image is " + std::to_string(header.width) + "x" + std::to_string(header.height) +
+                             " pixels but camera " + std::to_string(camera.camera_id) + " expects " +
+                             std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  }
+  const double full_scale = FullScale(header.bits);
+  std::vector<Observation*> inside;
+  for (Observation* o : observations) {
+    const int cx = static_cast<int>(std::floor(o->xy.x())), cy = static_cast<int>(std::floor(o->xy.y()));
+    if (cx - kHalfWindow >= 0 && cy - kHalfWindow >= 0 && cx + kHalfWindow < header.width &&
+        cy + kHalfWindow < header.height) {
+      inside.push_back(o);
+    }
+  }
+  std::vector<bool> done(inside.size(), false);
+  // Strips overlap by a window's rows, so every window lies whole in one of them.
+  ForEachImageStrip(path, kSampleStripRows, 2 * kHalfWindow, [&](const ImagePlanes& strip) {
+    const ImagePlanes grey = strip.Grey();
+    for (size_t k = 0; k < inside.size(); ++k) {
+      const Eigen::Vector2d& xy = inside[k]->xy;
+      const int cx = static_cast<int>(std::floor(xy.x())), cy = static_cast<int>(std::floor(xy.y()));
+      if (done[k] || cy - kHalfWindow < grey.y0 || cy + kHalfWindow >= grey.y0 + grey.height) continue;
+      inside[k]->grey = WindowMean(grey, cx, cy, full_scale);
+      done[k] = true;
+    }
+  });
+  return full_scale;
+}
+
 // Fills Observation::grey, reading each image with observations once; returns the
 // largest full grey scale of the images read.
 double SampleGrey(const ImageBlock& block, std::vector<Observation>* observations) {
@@ -142,9 +176,11 @@ double SampleGrey(const ImageBlock& block, std::vector<Observation>* observation
   std::vector<double> full_scale(block.images.size(), 0.0);
   tbb::parallel_for(size_t{0}, block.images.size(), [&](size_t i) {
     if (of_image[i].empty()) return;
-    const ImagePlanes grey = ReadImageFor(block.images[i].path, block.CameraOf(block.images[i])).Grey();
-    full_scale[i] = FullScale(grey.bits);
-    for (Observation* o : of_image[i]) o->grey = WindowMean(grey, o->xy, full_scale[i]);
+    try {
+      full_scale[i] = SampleImage(block.images[i].path, block.CameraOf(block.images[i]), of_image[i]);
+    } catch (const std::bad_alloc&) {
+      throw std::runtime_error(block.images[i].path + ": out of memory reading the image (radiometry choice)");
+    }
   });
   return *std::max_element(full_scale.begin(), full_scale.end());
 }

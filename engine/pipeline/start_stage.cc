@@ -21,6 +21,8 @@ double Percentile(std::vector<double> v, double q) {
   return v[static_cast<size_t>(std::clamp(q, 0.0, 1.0) * (v.size() - 1))];
 }
 
+}  // namespace
+
 RegionOfInterest ChooseRoi(const ImageBlock& block, const ReconstructionOptions& options) {
   if (options.roi) return *options.roi;
   if (block.roi) return *block.roi;
@@ -42,6 +44,8 @@ RegionOfInterest ChooseRoi(const ImageBlock& block, const ReconstructionOptions&
       "than 10 tie points to derive one from");
 }
 
+namespace {
+
 double ChooseStartHeight(const ImageBlock& block, const RegionOfInterest& roi, const ReconstructionOptions& options) {
   if (options.start_height) return *options.start_height;
   if (block.mean_height) return *block.mean_height;
@@ -56,7 +60,8 @@ double ChooseStartHeight(const ImageBlock& block, const RegionOfInterest& roi, c
   throw std::runtime_error("no start height: give one, or a mean terrain height in the project, or tie points");
 }
 
-// Mean ground pixel size of the original images at the centre.
+}  // namespace
+
 double GroundPixel(const ImageBlock& block, const Eigen::Vector3d& centre) {
   std::vector<double> gsd;
   for (const auto& image : block.images) {
@@ -66,6 +71,8 @@ double GroundPixel(const ImageBlock& block, const Eigen::Vector3d& centre) {
   }
   return Median(gsd);
 }
+
+namespace {
 
 // The tie points inside the region and the mean projection centre, for the fitted start
 // plane; nullopt keeps the horizontal plane (ReconstructionOptions::start_plane).

@@ -24,6 +24,12 @@ struct StartPlan {
   Eigen::Vector3d camera_up = Eigen::Vector3d::UnitZ();
 };
 
+// The region of the run: the options', the block's, else the bulk of the tie points
+// (2nd to 98th percentile). Throws std::runtime_error when there is none.
+RegionOfInterest ChooseRoi(const ImageBlock& block, const ReconstructionOptions& options);
+// Median ground pixel of the original images at `centre` (m).
+double GroundPixel(const ImageBlock& block, const Eigen::Vector3d& centre);
+
 // Throws std::runtime_error when there is no region and no height to start from.
 StartPlan PlanStart(const ImageBlock& block, const ReconstructionOptions& options);
 
