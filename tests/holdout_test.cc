@@ -33,7 +33,7 @@ std::string TempDir() {
 
 // The mesh with every vertex moved by `distance` (m) along the mean normal of the faces
 // around its position (area-weighted; vertices at one position, 0.01 mm apart at most,
-// move together, so walls and roofs stay joined).
+// move together, so walls and roofs stay joined). Vertices of no face stay.
 MeshData Displaced(const MeshData& mesh, double distance) {
   using Key = std::tuple<long long, long long, long long>;
   auto key = [](const Eigen::Vector3d& p) {
@@ -46,7 +46,10 @@ MeshData Displaced(const MeshData& mesh, double distance) {
   }
   MeshData moved = mesh;
   moved.normals.clear();
-  for (Eigen::Vector3d& v : moved.vertices) v += distance * normal_at[key(v)].normalized();
+  for (Eigen::Vector3d& v : moved.vertices) {
+    const auto it = normal_at.find(key(v));
+    if (it != normal_at.end() && it->second.norm() > 0.0) v += distance * it->second.normalized();
+  }
   return moved;
 }
 
@@ -90,6 +93,9 @@ TEST(HoldoutRankingTest, TruthScoresAboveHalfAndTwoGsdDisplaced) {
   const MeshData truth = BuildTruthMesh(rendered.scene).ToMeshData();
   const MeshData half = Displaced(truth, 0.5 * gsd);
   const MeshData two = Displaced(truth, 2.0 * gsd);
+  for (const MeshData* mesh : {&half, &two}) {
+    for (const Eigen::Vector3d& v : mesh->vertices) ASSERT_TRUE(v.allFinite());
+  }
   const std::string variants = TempDir() + "/holdout_variants";
   fs::create_directories(variants);
   WritePly(variants + "/truth.ply", truth);
