@@ -29,6 +29,7 @@
 #include "io/atomic_file.h"
 #include "io/colmap_io.h"
 #include "io/output_folder.h"
+#include "io/image_subset.h"
 #include "io/ply_io.h"
 #include "io/project_io.h"
 #include "mesh/closed_surface.h"
@@ -81,6 +82,12 @@ ImageBlock ReadBlock(const ReconstructAppSettings& app, const Say& say) {
     std::ostringstream shift;
     shift << "principal points shifted by (" << dx << ", " << dy << ") pixels";
     say(shift.str());
+  }
+  if (!app.exclude_images.empty()) {
+    const std::vector<int> excluded = SelectImages(block, app.exclude_images);
+    say("excluding " + std::to_string(excluded.size()) + " images (" + app.exclude_images +
+        "): " + ImageNames(block, excluded));
+    block = WithoutImages(block, excluded);
   }
   say(std::to_string(block.images.size()) + " images, " + std::to_string(block.cameras.size()) + " cameras, " +
       std::to_string(block.points.size()) + " tie points");

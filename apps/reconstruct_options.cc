@@ -43,6 +43,9 @@ void BindInput(const OptionBinder& bind, ReconstructAppSettings& app, Reconstruc
              "add DX DY pixels to every camera's principal point: a calibration whose top-left pixel centre is "
              "(0, 0) (e.g. Middlebury's K matrices) needs 0.5 0.5")
       ->expected(2);
+  bind.Value("--exclude-images", app.exclude_images,
+             "leave these images out, e.g. to judge the surface by them later with `facets evaluate --holdout`: "
+             "every-5th (the 5th, 10th, ... by name), a,b,c (names), or a file of names (one a line)");
   bind.Engine().Value("--start-mesh", options.closed.mesh_file,
                                "start from this closed (or any) mesh, PLY or OBJ, local coordinates");
 }

@@ -29,6 +29,7 @@ struct ReconstructAppSettings {
   std::string out;      // output folder
   std::vector<double> roi;                    // xmin ymin zmin xmax ymax zmax, global (m); empty: none
   std::vector<double> principal_point_shift;  // dx dy in pixels; empty: none
+  std::string exclude_images;  // images left out (io/image_subset.h syntax); empty: none
   ScenePreset scene = ScenePreset::kAuto;
   int threads = 0;                // 0: all cores
   double image_memory_mb = 1024.0;  // level images in memory up to this, the rest tiled on disk

@@ -190,4 +190,25 @@ RayHit TriangleScene::Intersect(const Eigen::Vector3d& origin,
   return result;
 }
 
+bool TriangleScene::Occluded(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                             float t_near, float t_far) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRay ray;
+  ray.org_x = static_cast<float>(origin.x());
+  ray.org_y = static_cast<float>(origin.y());
+  ray.org_z = static_cast<float>(origin.z());
+  ray.dir_x = static_cast<float>(direction.x());
+  ray.dir_y = static_cast<float>(direction.y());
+  ray.dir_z = static_cast<float>(direction.z());
+  ray.tnear = t_near;
+  ray.tfar = t_far;
+  ray.mask = std::numeric_limits<unsigned>::max();
+  ray.flags = 0;
+  ray.time = 0;
+  rtcOccluded1(scene_, &context, &ray);
+  // Embree sets tfar to -inf when the ray is blocked.
+  return ray.tfar < 0.0f;
+}
+
 }  // namespace facets

@@ -112,6 +112,10 @@ class TriangleScene {
   // Single ray, first hit only, within [t_near, t_far].
   RayHit Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                    float t_near = 0.0f, float t_far = 1e30f) const;
+  // Whether any triangle (either side) lies on the ray within [t_near, t_far]: Embree's
+  // occlusion query, cheaper than Intersect when the first hit itself is not needed.
+  bool Occluded(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                float t_near, float t_far) const;
 
  private:
   EmbreeDevice& device_;
