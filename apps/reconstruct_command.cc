@@ -132,7 +132,7 @@ void PrepareRun(const ImageBlock& block, ReconstructCommandLine* line, const Say
 
 // Products (each written to a temporary name and renamed: io/atomic_file.h) and the
 // closing lines of the log.
-void WriteRunProducts(const Reconstruction& result, const ImageBlock& block, const ReconstructCommandLine& line,
+void WriteRunProducts(Reconstruction* reconstruction, const ImageBlock& block, const ReconstructCommandLine& line,
                       std::chrono::steady_clock::time_point start, const Say& say) {
   const ReconstructAppSettings& app = line.app;
   say("stage products: writing into " + app.out);
@@ -142,7 +142,8 @@ void WriteRunProducts(const Reconstruction& result, const ImageBlock& block, con
   products.ortho = products.dsm = products.sigma = app.rasters;
   products.preview = app.preview;
   std::string list;
-  for (const auto& file : WriteProducts(result, block, app.out, products)) list += " " + file;
+  for (const auto& file : WriteProducts(reconstruction, block, app.out, products)) list += " " + file;
+  const Reconstruction& result = *reconstruction;
   say("  written:" + list);
   if (line.options.start_closed || !line.options.closed.mesh_file.empty()) {
     // A closed start must come out closed and without self-intersections.
@@ -163,6 +164,9 @@ void WriteRunProducts(const Reconstruction& result, const ImageBlock& block, con
   say("summary: " + std::to_string(result.mesh.n_vertices()) + " vertices (" + std::to_string(flagged) +
       " flagged), " + std::to_string(result.tessellation.triangles.size()) + " surface facets, sigma0 " +
       std::to_string(finest.sigma0) + " grey values, " + std::to_string(seconds) + " s; products in " + app.out);
+  std::string table = result.report.profile.Table();
+  table.pop_back();  // its last newline: say adds one
+  say(table);
 }
 
 void RunReconstruct(const CLI::App& sub, ReconstructCommandLine* line) {
@@ -182,8 +186,8 @@ void RunReconstruct(const CLI::App& sub, ReconstructCommandLine* line) {
   ChooseOptions(block, line, say);
   const std::string settings = SettingsFile(sub);
   PrepareRun(block, line, say);
-  const Reconstruction result = Reconstruct(block, line->options);
-  WriteRunProducts(result, block, *line, start, say);
+  Reconstruction result = Reconstruct(block, line->options);
+  WriteRunProducts(&result, block, *line, start, say);
   const std::filesystem::path out(app.out);
   WriteFileAtomically((out / "settings.ini").string(), settings);
   WriteFileAtomically((out / "facets.log").string(), log.str());
