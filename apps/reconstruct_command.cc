@@ -165,7 +165,7 @@ void PrepareRun(const ImageBlock& block, const std::string& dir, ReconstructComm
 }
 
 // Products into dir (the run's temporary output folder) and the closing lines of the log.
-void WriteRunProducts(const Reconstruction& result, const ImageBlock& block, const ReconstructCommandLine& line,
+void WriteRunProducts(Reconstruction* reconstruction, const ImageBlock& block, const ReconstructCommandLine& line,
                       const std::string& dir, std::chrono::steady_clock::time_point start, const Say& say) {
   const ReconstructAppSettings& app = line.app;
   say("stage products: writing into " + app.out);
@@ -175,7 +175,8 @@ void WriteRunProducts(const Reconstruction& result, const ImageBlock& block, con
   products.ortho = products.dsm = products.sigma = app.rasters;
   products.preview = app.preview;
   std::string list;
-  for (const auto& file : WriteProducts(result, block, dir, products)) list += " " + file;
+  for (const auto& file : WriteProducts(reconstruction, block, dir, products)) list += " " + file;
+  const Reconstruction& result = *reconstruction;
   say("  written:" + list);
   if (line.options.start_closed || !line.options.closed.mesh_file.empty()) {
     // A closed start must come out closed and without self-intersections.
@@ -196,6 +197,9 @@ void WriteRunProducts(const Reconstruction& result, const ImageBlock& block, con
   say("summary: " + std::to_string(result.mesh.n_vertices()) + " vertices (" + std::to_string(flagged) +
       " flagged), " + std::to_string(result.tessellation.triangles.size()) + " surface facets, sigma0 " +
       std::to_string(finest.sigma0) + " grey values, " + std::to_string(seconds) + " s; products in " + app.out);
+  std::string table = result.report.profile.Table();
+  table.pop_back();  // its last newline: say adds one
+  say(table);
 }
 
 // A failed or stopped run: the log beside the output folder (<out>.failed.log) and a
@@ -224,8 +228,8 @@ void RunInto(const CLI::App& sub, ReconstructCommandLine* line, const std::strin
   ChooseOptions(block, line, say);
   WriteFileAtomically((std::filesystem::path(dir) / "settings.ini").string(), SettingsFile(sub));
   PrepareRun(block, dir, line, say);
-  const Reconstruction result = Reconstruct(block, line->options);
-  WriteRunProducts(result, block, *line, dir, start, say);
+  Reconstruction result = Reconstruct(block, line->options);
+  WriteRunProducts(&result, block, *line, dir, start, say);
 }
 
 // Everything goes into a temporary folder that replaces --out only when complete

@@ -47,7 +47,7 @@ TEST(ProductsReconstruction, SeedGableOrthophotoAndDsmMatchTruth) {
   // result is closer to the truth (docs/EXPERIMENTS.md, tie-point start).
   options.start = StartSurfaceKind::kPlane;
   options.progress = [](const std::string& line) { std::cout << line << "\n"; };
-  const Reconstruction r = Reconstruct(block, options);
+  Reconstruction r = Reconstruct(block, options);
   ASSERT_FALSE(r.report.levels.empty());
   // Stopped by the break-off or the stall rule (a ridge vertex of one window keeps
   // moving at constant sigma0, tests/reconstruct_test.cc), not by the iteration cap.
@@ -62,7 +62,7 @@ TEST(ProductsReconstruction, SeedGableOrthophotoAndDsmMatchTruth) {
   fs::remove_all(out);
   ProductOptions products;
   products.raster_pixel = scene.ground_pixel_size;
-  WriteProducts(r, block, out, products);
+  WriteProducts(&r, block, out, products);
   std::string crs;
   const Raster ortho = ReadGeoTiff(out + "/ortho.tif", block.origin, &crs);
   const Raster dsm = ReadGeoTiff(out + "/dsm.tif", block.origin);

@@ -34,20 +34,21 @@ LaidLip LayLip(const RunContext& run, TinMesh* mesh, const TinMesh& before, cons
   LaidLip laid;
   laid.fold = LayLipOntoWall(mesh, lip, lip_options.embedding_iterations);
   UpdateVertexNormals(mesh);
-  laid.now = CountSurfaceFaults(*mesh);
+  laid.now = CountSurfaceFaults(run, *mesh);
   // Faces folded where the laid sheet meets the held wall: their wall corners within the
   // front tolerance go onto the plane.
   if (laid.now.folded > faults.folded) {
     laid.flattened = FlattenFoldedRim(mesh, lip, FoldedFaces(before), lip_options.front_tolerance);
     if (laid.flattened > 0) {
       UpdateVertexNormals(mesh);
-      laid.now = CountSurfaceFaults(*mesh);
+      laid.now = CountSurfaceFaults(run, *mesh);
     }
   }
   laid.laid = laid.now;
   // Crossings or folds left after the flattening: the untangling's first round smooths
   // the corners of folded faces.
   if (laid.now.WorseThan(faults) && run.options.fold_lips_untangle_rounds > 0) {
+    const auto clock = run.profile->Part("untangling");
     const UntangleReport untangle = UntangleSelfIntersections(mesh, run.options.fold_lips_untangle_rounds);
     UpdateVertexNormals(mesh);
     laid.now.crossing = untangle.pairs_after;
@@ -108,7 +109,7 @@ void TryLip(const RunContext& run, LevelPass* pass, const UnseenLip& lip, const 
   if (laid.untangled > 0) ++r.lips_untangled;
   if (laid.flattened > 0) ++r.lips_flattened;
   r.lip_vertices_moved += laid.fold.vertices;
-  *faults = CountSurfaceFaults(mesh);
+  *faults = CountSurfaceFaults(run, mesh);
 }
 
 }  // namespace
@@ -125,7 +126,7 @@ void LayUnseenLips(const RunContext& run, LevelPass* pass) {
             std::to_string(search.lips.size()) + " lips or pockets off a seen wall (" + std::to_string(search.no_wall) +
             " without a wall, " + std::to_string(search.not_free) + " not free)");
   }
-  SurfaceFaults faults = search.lips.empty() ? SurfaceFaults{} : CountSurfaceFaults(*pass->mesh);
+  SurfaceFaults faults = search.lips.empty() ? SurfaceFaults{} : CountSurfaceFaults(run, *pass->mesh);
   for (const UnseenLip& lip : search.lips) TryLip(run, pass, lip, lip_options, &faults);
   if (pass->report.lips_folded > 0 && pass->Finest(run)) pass->UpdateProductsSurface();
 }

@@ -215,19 +215,27 @@ std::vector<std::string> WriteSurfaceProducts(const ProductSurface& s, const std
   return written;
 }
 
-std::vector<std::string> WriteProducts(const Reconstruction& r, const ImageBlock& block,
-                                       const std::string& out_dir, const ProductOptions& options) {
-  std::vector<std::string> written =
-      WriteSurfaceProducts(MakeProductSurface(r, block), out_dir, options);
+std::vector<std::string> WriteProducts(Reconstruction* r, const ImageBlock& block, const std::string& out_dir,
+                                       const ProductOptions& options) {
+  RunProfile& profile = r->report.profile;
+  const ClockReading start = ReadClocks();
+  std::vector<std::string> written;
   const std::filesystem::path out(out_dir);
-  if (options.ply) {
-    MeshData tin = TinMeshData(r);
-    tin.origin = block.origin;
-    tin.crs = block.crs;
-    WritePly((out / "tin.ply").string(), tin);
-    written.push_back("tin.ply");
+  {
+    const auto clock = profile.Stage(-1, 0, "products");
+    const auto part = profile.Part("files");
+    written = WriteSurfaceProducts(MakeProductSurface(*r, block), out_dir, options);
+    if (options.ply) {
+      MeshData tin = TinMeshData(*r);
+      tin.origin = block.origin;
+      tin.crs = block.crs;
+      WritePly((out / "tin.ply").string(), tin);
+      written.push_back("tin.ply");
+    }
   }
-  WriteFileAtomically((out / "report.json").string(), r.report.Json() + "\n");
+  const ClockReading end = ReadClocks();
+  profile.AddToTotal({end.wall - start.wall, end.cpu - start.cpu});
+  WriteFileAtomically((out / "report.json").string(), r->report.Json() + "\n");
   written.push_back("report.json");
   return written;
 }

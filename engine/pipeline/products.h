@@ -93,7 +93,9 @@ std::vector<std::string> WriteSurfaceProducts(const ProductSurface& surface,
 
 // WriteSurfaceProducts of the reconstruction, plus tin.ply (with options.ply) and
 // report.json. Returns the file names.
-std::vector<std::string> WriteProducts(const Reconstruction& r, const ImageBlock& block,
-                                       const std::string& out_dir, const ProductOptions& options);
+// The files' seconds go into r->report.profile (stage "products", part "files") before
+// report.json is written.
+std::vector<std::string> WriteProducts(Reconstruction* r, const ImageBlock& block, const std::string& out_dir,
+                                       const ProductOptions& options);
 
 }  // namespace facets

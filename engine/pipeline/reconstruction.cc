@@ -75,15 +75,30 @@ std::string AdjustLine(const RunContext& run, const LevelPass& pass, size_t inde
 // The level's refinement after its adjustment: search rounds, straightening, wall
 // corners (the last pass), unseen vertices relaxed, lips, the visual hull, untangling.
 void RefineLevel(const RunContext& run, LevelPass* pass, LevelSearch* search) {
-  SearchRounds(run, pass, search);
-  StraightenCreases(run, pass);
+  {
+    const auto clock = pass->Clock(run, "search rounds");
+    SearchRounds(run, pass, search);
+  }
+  {
+    const auto clock = pass->Clock(run, "straighten");
+    StraightenCreases(run, pass);
+  }
   const ReconstructionOptions& options = run.options;
-  if ((options.wall_corners || options.wall_feet || options.wall_eaves) && pass->last && !run.closed && !run.fitted)
+  if ((options.wall_corners || options.wall_feet || options.wall_eaves) && pass->last && !run.closed && !run.fitted) {
+    const auto clock = pass->Clock(run, "wall corners");
     LayWallCorners(run, pass);
-  // Not on a closed start's finest level: its rims, seen edge-on, count as unseen.
-  const bool relax_now = pass->level > run.finest || !run.closed;
-  if (relax_now && RelaxUnseen(run, pass) > 0 && pass->Finest(run)) pass->UpdateProductsSurface();
-  LayUnseenLips(run, pass);
+  }
+  {
+    const auto clock = pass->Clock(run, "relax unseen");
+    // Not on a closed start's finest level: its rims, seen edge-on, count as unseen.
+    const bool relax_now = pass->level > run.finest || !run.closed;
+    if (relax_now && RelaxUnseen(run, pass) > 0 && pass->Finest(run)) pass->UpdateProductsSurface();
+  }
+  {
+    const auto clock = pass->Clock(run, "lips");
+    LayUnseenLips(run, pass);
+  }
+  const auto clock = pass->Clock(run, "validity");
   HoldInsideVisualHull(run, pass);
   CloseLevelReport(run, pass, UntangleCrossings(run, pass));
 }
@@ -107,14 +122,19 @@ void RunPass(const RunContext& run, LevelPass* pass, size_t index, size_t count,
   pass->adjustment = run.LevelOptions(pass->level, pass->cycle);
   LevelReport& r = pass->report;
   if (pass->cycle > 0 && pass->level == std::min(run.options.v_cycle_level, run.coarsest)) {
+    const auto clock = pass->Clock(run, "back up");
     *pass->mesh = std::move(*cycle_top_tin);
     r.projection = GoBackUp(run, pass, result->tessellation);
   } else if (pass->level != run.coarsest) {
+    const auto clock = pass->Clock(run, "descent");
     r.smoothed = DescendOneLevel(run, pass);
   }
   r.cycle = pass->cycle;
   LevelSearch search(run, pass);
-  SearchBeforeLevel(run, pass, &search);
+  {
+    const auto clock = pass->Clock(run, "search before");
+    SearchBeforeLevel(run, pass, &search);
+  }
   r.level = pass->level;
   r.ground_pixel = run.GroundPixel(pass->level);
   r.edge_length = run.EdgeLength(pass->level);
@@ -122,7 +142,10 @@ void RunPass(const RunContext& run, LevelPass* pass, size_t index, size_t count,
   r.vertices = static_cast<int>(pass->mesh->n_vertices());
   r.faces = static_cast<int>(pass->mesh->n_faces());
   run.Say(AdjustLine(run, *pass, index, count));
-  AdjustLevel(run, pass, cap_steps);
+  {
+    const auto clock = pass->Clock(run, "adjust");
+    AdjustLevel(run, pass, cap_steps);
+  }
   RefineLevel(run, pass, &search);
   if (run.options.level_done) run.options.level_done(pass->level, *pass->mesh);
   SayLevelDone(run, *pass);
@@ -170,6 +193,7 @@ AdjustmentOptions RunContext::LevelOptions(int level, int cycle) const {
                                                       : adjustment.break_off * std::pow(2.0, level);
   if (adjustment.max_step == 0.0) adjustment.max_step = 0.5 * EdgeLength(level);
   adjustment.compute_precision = options.adjustment.compute_precision && level == finest;
+  adjustment.clocks = profile->window_clocks();
   if (closed) adjustment.rounded_ridges = false;
   return adjustment;
 }
@@ -182,22 +206,35 @@ Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions&
     if (options.progress) options.progress(line);
   };
   Reconstruction result;
+  RunProfile& profile = result.report.profile;
+  const ClockReading run_start = ReadClocks();
   StartPlan plan = PlanStart(block, options);
+  profile.AddStage(-1, 0, "start", run_start);
   result.report.camera_up = plan.camera_up;
+  const ClockReading images_start = ReadClocks();
   const LevelImageSource images(block, options, say);
+  profile.AddStage(-1, 0, "images", images_start);
   result.report.seconds_images = images.seconds();
   result.report.images_cached = images.cached();
   result.channels = images.channels();
   const RunContext run{block, options, images, plan.closed, plan.fitted, plan.gsd0, options.levels - 1,
-                       options.finest_level};
-  TinMesh mesh = MakeStartSurface(run, &plan, &result.report);
+                       options.finest_level, &profile};
+  TinMesh mesh;
+  {
+    const auto clock = profile.Stage(-1, 0, "start");
+    mesh = MakeStartSurface(run, &plan, &result.report);
+  }
   if (NormalSearchOn(run)) say("normal search: steep vertices before each finer level");
   RunPasses(run, &mesh, &result);
   result.mesh = std::move(mesh);
   if (options.flatten_crossing_facets) {
+    const auto clock = profile.Stage(-1, 0, "products");
+    const auto part = profile.Part("flatten crossing facets");
     result.report.facet_crossings = FlattenCrossingFacets(result.mesh, &result.tessellation);
     say("surface facets: " + result.report.facet_crossings.Brief());
   }
+  const ClockReading run_end = ReadClocks();
+  profile.SetTotal({run_end.wall - run_start.wall, run_end.cpu - run_start.cpu});
   result.report.seconds_total = Seconds(start);
   say("done: " + result.report.BriefReport());
   return result;

@@ -19,6 +19,7 @@
 
 #include "engine/solver/adjustment_options.h"
 #include "engine/pipeline/level_windows.h"
+#include "engine/pipeline/run_profile.h"
 #include "engine/search/normal_search.h"
 #include "engine/search/plane_propagation.h"
 #include "engine/images/pyramid.h"
@@ -266,6 +267,9 @@ struct ReconstructionReport {
   double seconds_total = 0.0;
   double seconds_images = 0.0;
   bool images_cached = false;
+  // Wall and CPU seconds per stage and level (engine/pipeline/run_profile.h); the
+  // products' files are added as they are written (WriteProducts).
+  RunProfile profile;
   std::string Json() const;
   std::string BriefReport() const;
 };

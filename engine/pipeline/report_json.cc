@@ -167,6 +167,35 @@ json StartJson(const ReconstructionReport& report) {
   return j;
 }
 
+json WindowClocksJson(const WindowClocks& w) {
+  return {{"runs", w.runs},           {"iterations", w.iterations}, {"prepare", w.prepare},
+          {"cast", w.cast},           {"linearise", w.linearise},   {"solve", w.solve},
+          {"update", w.update},       {"finish", w.finish}};
+}
+
+// RunProfile: the run's total, every stage and part, and the categories.
+json ProfileJson(const RunProfile& profile) {
+  const ClockReading& total = profile.total();
+  const double cpu = total.cpu > 0.0 ? total.cpu : 1.0;
+  json j;
+  j["total"] = {{"wall_seconds", total.wall}, {"cpu_seconds", total.cpu}};
+  j["stages_cpu_seconds"] = profile.StagesCpu();
+  j["entries"] = json::array();
+  for (const ProfileEntry& e : profile.entries()) {
+    json entry = {{"level", e.level},          {"cycle", e.cycle},       {"stage", e.stage},
+                  {"calls", e.calls},          {"wall_seconds", e.wall}, {"cpu_seconds", e.cpu},
+                  {"cpu_share", e.cpu / cpu}};
+    if (!e.part.empty()) entry["part"] = e.part;
+    if (e.windows.runs > 0) entry["window_thread_cpu_seconds"] = WindowClocksJson(e.windows);
+    j["entries"].push_back(entry);
+  }
+  for (const std::string& name : RunProfile::Categories()) {
+    const double seconds = profile.CategoryCpu(name);
+    j["categories"][name] = {{"cpu_seconds", seconds}, {"cpu_share", seconds / cpu}};
+  }
+  return j;
+}
+
 }  // namespace
 
 std::string ReconstructionReport::BriefReport() const {
@@ -195,6 +224,7 @@ std::string ReconstructionReport::Json() const {
                  {"cg_iterations", cg},
                  {"observations_last_iterations", observations},
                  {"sigma0_finest", levels.empty() ? 0.0 : levels.back().window.sigma0}};
+  j["profile"] = ProfileJson(profile);
   return j.dump(2);
 }
 

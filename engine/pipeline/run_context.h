@@ -24,6 +24,7 @@ struct RunContext {
   double gsd0 = 0.0;                          // ground pixel of the original images, m
   int coarsest = 0;
   int finest = 0;
+  RunProfile* profile = nullptr;  // the report's: each stage clocks itself into it
 
   void Say(const std::string& line) const {
     if (options.progress) options.progress(line);
@@ -50,6 +51,10 @@ struct LevelPass {
   bool Finest(const RunContext& run) const { return level == run.finest; }
   // "  level L" for progress lines.
   std::string Prefix() const { return "  level " + std::to_string(level); }
+  // Clocks one stage of this pass while alive (RunProfile::Stage).
+  RunProfile::Scope Clock(const RunContext& run, const std::string& stage) const {
+    return run.profile->Stage(level, cycle, stage);
+  }
   // After the finest level's adjustment, moves of vertices that keep the topology move
   // only the products' surface points: the tessellation follows the TIN.
   void UpdateProductsSurface();

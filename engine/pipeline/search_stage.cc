@@ -35,8 +35,13 @@ bool LevelSearch::Active() const {
 NormalSearchReport LevelSearch::Search(PlanePropagationReport* planes) {
   if (images_.empty()) images_ = run_.images.Whole(pass_->level, &storage_);
   const double ground_pixel = run_.GroundPixel(pass_->level);
-  NormalSearchReport ns = SearchAlongNormals(pass_->mesh, images_, ground_pixel, run_.options.normal_search_options);
+  NormalSearchReport ns;
+  {
+    const auto clock = run_.profile->Part("normal search");
+    ns = SearchAlongNormals(pass_->mesh, images_, ground_pixel, run_.options.normal_search_options);
+  }
   if (run_.options.plane_propagation) {
+    const auto clock = run_.profile->Part("plane propagation");
     *planes = PropagatePlanes(pass_->mesh, images_, ground_pixel, run_.options.plane_propagation_options);
     run_.Say(PlanesLine(*pass_, *planes));
     ns.moved += planes->moved;

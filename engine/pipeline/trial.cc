@@ -14,6 +14,7 @@ std::string TrialVerdict::Brief() const {
 
 TrialVerdict JudgeProposal(const RunContext& run, LevelPass* pass, TinMesh before, int local_rings,
                            double tolerance) {
+  const auto clock = run.profile->Part("trial re-adjustment");
   TrialVerdict verdict;
   verdict.was_sigma0 = pass->adjusted.summary.sigma0;
   const bool keep_grey = pass->Finest(run);
@@ -41,13 +42,15 @@ TrialVerdict JudgeProposal(const RunContext& run, LevelPass* pass, TinMesh befor
   return verdict;
 }
 
-SurfaceFaults CountSurfaceFaults(const TinMesh& mesh) {
+SurfaceFaults CountSurfaceFaults(const RunContext& run, const TinMesh& mesh) {
+  const auto clock = run.profile->Part("crossing counts");
   return {CountSelfIntersections(mesh), CountFoldedFaces(mesh)};
 }
 
-SurfaceFaults UntangleNewFaults(TinMesh* mesh, const SurfaceFaults& before, int rounds) {
-  SurfaceFaults now = CountSurfaceFaults(*mesh);
+SurfaceFaults UntangleNewFaults(const RunContext& run, TinMesh* mesh, const SurfaceFaults& before, int rounds) {
+  SurfaceFaults now = CountSurfaceFaults(run, *mesh);
   if (!now.WorseThan(before) || rounds <= 0) return now;
+  const auto clock = run.profile->Part("untangling");
   now.crossing = UntangleSelfIntersections(mesh, rounds).pairs_after;
   UpdateVertexNormals(mesh);
   now.folded = CountFoldedFaces(*mesh);

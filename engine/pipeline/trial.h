@@ -36,10 +36,10 @@ struct SurfaceFaults {
     return crossing > before.crossing || folded > before.folded;
   }
 };
-SurfaceFaults CountSurfaceFaults(const TinMesh& mesh);
+SurfaceFaults CountSurfaceFaults(const RunContext& run, const TinMesh& mesh);
 
 // A proposal that adds faults is untangled (at most `rounds` rounds of
 // UntangleSelfIntersections); returns the faults left.
-SurfaceFaults UntangleNewFaults(TinMesh* mesh, const SurfaceFaults& before, int rounds);
+SurfaceFaults UntangleNewFaults(const RunContext& run, TinMesh* mesh, const SurfaceFaults& before, int rounds);
 
 }  // namespace facets

@@ -47,7 +47,11 @@ void HoldInsideVisualHull(const RunContext& run, LevelPass* pass) {
 
 int UntangleCrossings(const RunContext& run, LevelPass* pass) {
   if (!run.options.untangle) return -1;
-  const UntangleReport untangled = UntangleSelfIntersections(pass->mesh);
+  UntangleReport untangled;
+  {
+    const auto clock = run.profile->Part("untangling");
+    untangled = UntangleSelfIntersections(pass->mesh);
+  }
   if (untangled.rounds == 0) return untangled.pairs_after;
   UpdateVertexNormals(pass->mesh);
   LevelReport& r = pass->report;
@@ -69,6 +73,7 @@ void CloseLevelReport(const RunContext& run, LevelPass* pass, int crossing_left)
   LevelReport& r = pass->report;
   r.vertices = static_cast<int>(mesh.n_vertices());
   r.faces = static_cast<int>(mesh.n_faces());
+  const auto clock = run.profile->Part("crossing counts");
   r.folded_faces = CountFoldedFaces(mesh);
   r.self_intersections = crossing_left >= 0 ? crossing_left : CountSelfIntersections(mesh);
   for (const WindowReport& w : pass->adjusted.windows) {

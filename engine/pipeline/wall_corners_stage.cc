@@ -22,11 +22,16 @@ void SplitStretchedEdges(const RunContext& run, LevelPass* pass) {
   quality.max_rounds = 2;
   if (CountLongEdges(mesh, quality) == 0) return;
   const TinMesh before_split = mesh;
-  const int crossing_before = CountSelfIntersections(mesh);
+  auto count_crossing = [&run](const TinMesh& surface) {
+    const auto clock = run.profile->Part("crossing counts");
+    return CountSelfIntersections(surface);
+  };
+  const int crossing_before = count_crossing(mesh);
   const QualityReport split = QualityPass(&mesh, quality);
   UpdateVertexNormals(&mesh);
-  int crossing_after = CountSelfIntersections(mesh);
+  int crossing_after = count_crossing(mesh);
   if (crossing_after > crossing_before && run.options.fold_lips_untangle_rounds > 0) {
+    const auto clock = run.profile->Part("untangling");
     crossing_after = UntangleSelfIntersections(&mesh, run.options.fold_lips_untangle_rounds).pairs_after;
     UpdateVertexNormals(&mesh);
   }
@@ -39,6 +44,7 @@ void SplitStretchedEdges(const RunContext& run, LevelPass* pass) {
   pass->report.corner_splits = split.splits;
   run.Say(pass->Prefix() + " corners: " + std::to_string(split.splits) + " stretched edges split, " +
           std::to_string(mesh.n_faces()) + " faces; adjusted again");
+  const auto clock = run.profile->Part("level re-adjustment");
   pass->adjusted = AdjustLevelInWindows(&mesh, run.images.ForWindows(pass->level), pass->adjustment,
                                         run.options.windows, pass->Finest(run), run.options.progress);
 }
@@ -83,7 +89,7 @@ void TryCorner(const RunContext& run, LevelPass* pass, const WallCorner& corner,
   if (laid.moved == 0) return;
   UpdateVertexNormals(&mesh);
   std::ostringstream line = CornerLine(*pass, corner, laid);
-  const SurfaceFaults now = UntangleNewFaults(&mesh, *faults, run.options.fold_lips_untangle_rounds);
+  const SurfaceFaults now = UntangleNewFaults(run, &mesh, *faults, run.options.fold_lips_untangle_rounds);
   if (now.WorseThan(*faults)) {
     line << ": " << now.crossing - faults->crossing << " crossing pairs and " << now.folded - faults->folded
          << " folded faces, left";
@@ -104,7 +110,7 @@ void TryCorner(const RunContext& run, LevelPass* pass, const WallCorner& corner,
   LevelReport& r = pass->report;
   ++(corner.kind == CreaseKind::kFoot ? r.feet_laid : corner.kind == CreaseKind::kEave ? r.eaves_laid : r.corners_laid);
   r.corner_vertices_moved += laid.moved;
-  *faults = CountSurfaceFaults(mesh);
+  *faults = CountSurfaceFaults(run, mesh);
 }
 
 }  // namespace
@@ -122,7 +128,7 @@ void LayWallCorners(const RunContext& run, LevelPass* pass) {
   pass->report.feet_found = search.count(CreaseKind::kFoot);
   pass->report.eaves_found = search.count(CreaseKind::kEave);
   run.Say(FoundLine(run, *pass, search));
-  SurfaceFaults faults = search.corners.empty() ? SurfaceFaults{} : CountSurfaceFaults(*pass->mesh);
+  SurfaceFaults faults = search.corners.empty() ? SurfaceFaults{} : CountSurfaceFaults(run, *pass->mesh);
   for (const WallCorner& corner : search.corners) TryCorner(run, pass, corner, corner_options, &faults);
   const LevelReport& r = pass->report;
   if (r.corners_laid + r.feet_laid + r.eaves_laid > 0 || r.corner_splits > 0) pass->UpdateProductsSurface();

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "engine/solver/pcg.h"
+#include "engine/solver/window_clocks.h"
 
 namespace facets {
 
@@ -143,6 +144,10 @@ struct AdjustmentOptions {
   // image's pixels on the vertex's faces (0: any pixel; WindowAdjustment::VertexViews).
   double min_view_share = 0.3;
   double max_sigma = 0.0;
+
+  // Not an option of the estimate: where each window run adds its phases' CPU seconds
+  // (the run's profile); none when null.
+  WindowClockSink* clocks = nullptr;
 
   // Throws std::invalid_argument naming the bad option.
   void Check() const;

@@ -211,18 +211,25 @@ void WindowAdjustment::BuildPattern() {
 
 WindowReport WindowAdjustment::Run() {
   const auto run_start = std::chrono::steady_clock::now();
+  clocks_ = WindowClocks{};
+  clocks_.runs = 1;
+  double cpu = ThreadCpuSeconds();
   WindowReport report;
   PrepareRun(&report);
+  clocks_.prepare = ThreadCpuLap(&cpu);
   std::vector<std::vector<PixelObservation>> casts;
   const double bounds[3] = {options_.break_off, 2 * options_.break_off, 4 * options_.break_off};
   for (int iteration = 1; iteration <= options_.max_iterations; ++iteration) {
     IterationReport it;
     it.iteration = iteration;
+    ++clocks_.iterations;
     const Linearisation system = LineariseIteration(iteration, &casts, &it);
+    cpu = ThreadCpuSeconds();
     const auto start = std::chrono::steady_clock::now();
     const Eigen::VectorXd solution = SolveNormalEquations(system.rhs, &it);
     rhs_ = system.rhs;
     it.seconds_solve = Seconds(start);
+    clocks_.solve += ThreadCpuLap(&cpu);
 
     const long long redundancy = system.count + system.pseudo - system.determined;
     const double vpv = std::max(system.lpl - solution.dot(system.rhs), 0.0);
@@ -253,7 +260,10 @@ WindowReport WindowAdjustment::Run() {
       break;
     }
   }
+  cpu = ThreadCpuSeconds();
   FinishReport(casts, &report);
+  clocks_.finish = ThreadCpuLap(&cpu);
+  if (options_.clocks) options_.clocks->Add(clocks_);
   report.seconds_total = Seconds(run_start);
   return report;
 }
@@ -278,11 +288,13 @@ void WindowAdjustment::PrepareRun(WindowReport* report) {
 
 WindowAdjustment::Linearisation WindowAdjustment::LineariseIteration(
     int iteration, std::vector<std::vector<PixelObservation>>* casts, IterationReport* it) {
+  double cpu = ThreadCpuSeconds();
   auto start = std::chrono::steady_clock::now();
   it->observations = CastAll(casts, it);
   it->background = DropBackground(casts);
   it->observations -= it->background;
   it->seconds_cast = Seconds(start);
+  clocks_.cast += ThreadCpuLap(&cpu);
   if (it->observations == 0) {
     throw std::runtime_error("WindowAdjustment: no image sees the window (0 observations)");
   }
@@ -301,6 +313,7 @@ WindowAdjustment::Linearisation WindowAdjustment::LineariseIteration(
   system.pseudo += it->silhouette;
   system.determined = AddRidge();
   it->seconds_linearise = Seconds(start);
+  clocks_.linearise += ThreadCpuLap(&cpu);
   return system;
 }
 
@@ -318,6 +331,7 @@ Eigen::VectorXd WindowAdjustment::SolveNormalEquations(const Eigen::VectorXd& rh
 
 double WindowAdjustment::UpdateUnknowns(const Eigen::VectorXd& solution, IterationReport* it) {
   // Vertices along their (current) normals, then grey values, radiometry.
+  double cpu = ThreadCpuSeconds();
   const auto start = std::chrono::steady_clock::now();
   const int num_vertices = static_cast<int>(mesh_->n_vertices());
   double scale = 1.0;
@@ -355,6 +369,7 @@ double WindowAdjustment::UpdateUnknowns(const Eigen::VectorXd& solution, Iterati
   UpdateTessellationPoints(BuildPatches(*mesh_, ComputeCornerNormals(*mesh_, crease_edges_)), &tess_);
   scene_->Update(tess_);
   it->seconds_update = Seconds(start);
+  clocks_.update += ThreadCpuLap(&cpu);
   it->max_dn_interior = max_dn[0];
   it->max_dn_border = max_dn[1];
   it->max_dn_corner = max_dn[2];

@@ -222,6 +222,7 @@ class WindowAdjustment {
   std::vector<LevelImage> images_;
   AdjustmentOptions options_;
   int channels_ = 1;
+  WindowClocks clocks_;  // of the current Run, added to options_.clocks at its end
 
   Tessellation tess_;
   std::unique_ptr<SurfaceScene> scene_;
