@@ -1,5 +1,6 @@
 #include "visibility/embree_scene.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
@@ -17,22 +18,79 @@ void ErrorCallback(void*, RTCError code, const char* message) {
   std::fprintf(stderr, "%s\n", last_embree_error.c_str());
 }
 
+// 0 SSE2, 1 SSE4.2, 2 AVX, 3 AVX2, 4 AVX-512 (Embree's AVX-512 kernels need F, CD, DQ, BW, VL).
+int CpuIsaRank() {
+  __builtin_cpu_init();
+  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512cd") &&
+      __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw") &&
+      __builtin_cpu_supports("avx512vl")) {
+    return 4;
+  }
+  if (__builtin_cpu_supports("avx2")) return 3;
+  if (__builtin_cpu_supports("avx")) return 2;
+  if (__builtin_cpu_supports("sse4.2")) return 1;
+  return 0;
+}
+
+// The value of `key` ("isa=") in a comma- or space-separated configuration, or "".
+std::string ConfigValue(const std::string& config, const std::string& key) {
+  for (std::size_t at = config.find(key); at != std::string::npos; at = config.find(key, at + 1)) {
+    if (at > 0 && config[at - 1] != ',' && config[at - 1] != ' ') continue;  // "max_isa=" holds "isa="
+    const std::size_t begin = at + key.size();
+    return config.substr(begin, config.find_first_of(", ", begin) - begin);
+  }
+  return "";
+}
+
+// The rank an isa= or max_isa= entry of an Embree configuration allows (4 when none).
+int ConfiguredIsaCap(const std::string& config) {
+  int cap = 4;
+  for (const char* key : {"isa=", "max_isa="}) {
+    const std::string value = ConfigValue(config, key);
+    if (value == "sse" || value == "sse2" || value == "sse3" || value == "ssse3" || value == "sse4.1") {
+      cap = std::min(cap, 0);
+    } else if (value == "sse4.2") {
+      cap = std::min(cap, 1);
+    } else if (value == "avx" || value == "avxi") {
+      cap = std::min(cap, 2);
+    } else if (value == "avx2") {
+      cap = std::min(cap, 3);
+    }
+  }
+  return cap;
+}
+
 }  // namespace
 
-EmbreeDevice::EmbreeDevice() {
-  // Embree picks its kernels by the CPU (SSE4.2, AVX2, AVX-512), and ray hits on edges,
-  // and every decision that follows from them, can differ between machines.
-  // FACETS_EMBREE_CONFIG passes a device
-  // configuration, e.g. "isa=avx2", to compare runs across machines.
-  const char* config = std::getenv("FACETS_EMBREE_CONFIG");
-  device_ = rtcNewDevice(config && *config ? config : nullptr);
+// Embree picks its kernels by the CPU (SSE4.2, AVX2, AVX-512), and ray hits on edges,
+// and every decision that follows from them, can differ between machines.
+// FACETS_EMBREE_CONFIG passes a device configuration, e.g. "isa=avx2", to compare runs
+// across machines.
+EmbreeDevice::EmbreeDevice()
+    : EmbreeDevice(std::getenv("FACETS_EMBREE_CONFIG") ? std::getenv("FACETS_EMBREE_CONFIG") : "") {}
+
+EmbreeDevice::EmbreeDevice(const std::string& config) : config_(config) {
+  device_ = rtcNewDevice(config_.empty() ? nullptr : config_.c_str());
   if (!device_) {
     throw std::runtime_error("Embree: cannot create a device (error " +
                              std::to_string(static_cast<int>(rtcGetDeviceError(nullptr))) +
-                             (config && *config ? ", FACETS_EMBREE_CONFIG=\"" + std::string(config) + "\"" : "") +
-                             ")");
+                             (config_.empty() ? "" : ", configuration \"" + config_ + "\"") + ")");
   }
   rtcSetDeviceErrorFunction(device_, ErrorCallback, nullptr);
+}
+
+std::string EmbreeDevice::KernelIsa() const {
+  static const char* const kNames[] = {"SSE2", "SSE4.2", "AVX", "AVX2", "AVX-512"};
+  const int isa = std::min(CpuIsaRank(), ConfiguredIsaCap(config_));
+  return kNames[isa];
+}
+
+std::string EmbreeDevice::Describe() const {
+  const long version = static_cast<long>(rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_VERSION));
+  std::string text = "Embree " + std::to_string(version / 10000) + "." + std::to_string(version / 100 % 100) + "." +
+                     std::to_string(version % 100) + ", " + KernelIsa() + " kernels";
+  if (!config_.empty()) text += " (configuration \"" + config_ + "\")";
+  return text;
 }
 
 EmbreeDevice::~EmbreeDevice() { rtcReleaseDevice(device_); }

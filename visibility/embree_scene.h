@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <limits>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace facets {
@@ -19,7 +20,9 @@ namespace facets {
 // the next Check() and logged to stderr by the callback.
 class EmbreeDevice {
  public:
+  // The device configuration from FACETS_EMBREE_CONFIG (e.g. "isa=avx2"), or Embree's default.
   EmbreeDevice();
+  explicit EmbreeDevice(const std::string& config);
   ~EmbreeDevice();
   EmbreeDevice(const EmbreeDevice&) = delete;
   EmbreeDevice& operator=(const EmbreeDevice&) = delete;
@@ -31,7 +34,15 @@ class EmbreeDevice {
   // A process-wide device, created on first use.
   static EmbreeDevice& Shared();
 
+  // The instruction set of the kernels Embree runs here ("SSE2", "SSE4.2", "AVX", "AVX2",
+  // "AVX-512"): the widest the CPU has, capped by an isa= or max_isa= entry of the
+  // configuration. Ray hits on triangle edges can differ between them.
+  std::string KernelIsa() const;
+  // "Embree 3.13.5, AVX-512 kernels" plus the configuration when one was given.
+  std::string Describe() const;
+
  private:
+  std::string config_;
   RTCDevice device_ = nullptr;
 };
 
