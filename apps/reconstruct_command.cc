@@ -33,6 +33,7 @@
 #include "io/ply_io.h"
 #include "io/project_io.h"
 #include "mesh/closed_surface.h"
+#include "visibility/embree_scene.h"
 
 namespace facets {
 namespace {
@@ -224,6 +225,8 @@ void RunInto(const CLI::App& sub, ReconstructCommandLine* line, const std::strin
   if (app.threads > 0) {
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, app.threads);
   }
+  // Ray hits on triangle edges, and decisions that follow from them, can depend on the kernels.
+  say("ray casting: " + EmbreeDevice::Shared().Describe());
   const ImageBlock block = ReadBlock(app, say);
   ChooseOptions(block, line, say);
   WriteFileAtomically((std::filesystem::path(dir) / "settings.ini").string(), SettingsFile(sub));
