@@ -10,12 +10,14 @@
 #include <functional>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "apps/reconstruct_options.h"
+#include "engine/pipeline/geometry_check.h"
 #include "engine/pipeline/products.h"
 #include "engine/pipeline/reconstruction.h"
 #include "engine/pipeline/radiometry_choice.h"
@@ -53,6 +55,16 @@ ImageBlock ReadBlock(const ReconstructAppSettings& app, const Say& say) {
   say(std::to_string(block.images.size()) + " images, " + std::to_string(block.cameras.size()) + " cameras, " +
       std::to_string(block.points.size()) + " tie points");
   return block;
+}
+
+// --roi in the block's local coordinates; nullopt when not given.
+std::optional<RegionOfInterest> GivenRegion(const ReconstructAppSettings& app, const ImageBlock& block) {
+  if (app.roi.empty()) return std::nullopt;
+  if (app.roi.size() != 6) throw std::invalid_argument("--roi takes 6 numbers: xmin ymin zmin xmax ymax zmax");
+  RegionOfInterest roi;
+  roi.min = Eigen::Vector3d(app.roi[0], app.roi[1], app.roi[2]) - block.origin;
+  roi.max = Eigen::Vector3d(app.roi[3], app.roi[4], app.roi[5]) - block.origin;
+  return roi;
 }
 
 // The scene preset (given, or chosen from the cameras and tie points) over the library's
@@ -119,13 +131,7 @@ void PrepareRun(const ImageBlock& block, ReconstructCommandLine* line, const Say
   ReconstructionOptions& options = line->options;
   options.closed.write_start = (std::filesystem::path(app.out) / "start.ply").string();
   PlaceLevelImages(block, app, &options, say);
-  if (!app.roi.empty()) {
-    if (app.roi.size() != 6) throw std::invalid_argument("--roi takes 6 numbers: xmin ymin zmin xmax ymax zmax");
-    RegionOfInterest roi;
-    roi.min = Eigen::Vector3d(app.roi[0], app.roi[1], app.roi[2]) - block.origin;
-    roi.max = Eigen::Vector3d(app.roi[3], app.roi[4], app.roi[5]) - block.origin;
-    options.roi = roi;
-  }
+  options.roi = GivenRegion(app, block);
   options.progress = say;
   if (app.keep_levels) KeepLevels(app.out, &options);
 }
@@ -178,11 +184,14 @@ void RunReconstruct(const CLI::App& sub, ReconstructCommandLine* line) {
   if (app.threads > 0) {
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, app.threads);
   }
-  const ImageBlock block = ReadBlock(app, say);
+  ImageBlock block = ReadBlock(app, say);
+  GeometryCheck geometry;
+  block = CheckedBlock(block, GivenRegion(app, block), say, &geometry);
   ChooseOptions(block, line, say);
   const std::string settings = SettingsFile(sub);
   PrepareRun(block, line, say);
-  const Reconstruction result = Reconstruct(block, line->options);
+  Reconstruction result = Reconstruct(block, line->options);
+  result.report.geometry = std::move(geometry);
   WriteRunProducts(result, block, *line, start, say);
   const std::filesystem::path out(app.out);
   WriteFileAtomically((out / "settings.ini").string(), settings);

@@ -21,8 +21,10 @@ double Percentile(std::vector<double> v, double q) {
   return v[static_cast<size_t>(std::clamp(q, 0.0, 1.0) * (v.size() - 1))];
 }
 
-RegionOfInterest ChooseRoi(const ImageBlock& block, const ReconstructionOptions& options) {
-  if (options.roi) return *options.roi;
+}  // namespace
+
+RegionOfInterest ChooseRegion(const ImageBlock& block, const std::optional<RegionOfInterest>& given) {
+  if (given) return *given;
   if (block.roi) return *block.roi;
   if (block.points.size() >= 10) {
     // The bulk of the tie points: 2nd to 98th percentile, robust to a few blunders.
@@ -41,6 +43,8 @@ RegionOfInterest ChooseRoi(const ImageBlock& block, const ReconstructionOptions&
       "no region of interest: the block has none, none was given, and there are fewer "
       "than 10 tie points to derive one from");
 }
+
+namespace {
 
 double ChooseStartHeight(const ImageBlock& block, const RegionOfInterest& roi, const ReconstructionOptions& options) {
   if (options.start_height) return *options.start_height;
@@ -177,7 +181,7 @@ StartPlan PlanStart(const ImageBlock& block, const ReconstructionOptions& option
     if (options.progress) options.progress(line);
   };
   StartPlan plan;
-  plan.roi = ChooseRoi(block, options);
+  plan.roi = ChooseRegion(block, options.roi);
   plan.camera_up = CameraUp(block);
   // A closed start (objects) replaces the plane; its centre sets the ground pixel.
   if (options.start_closed || !options.closed.mesh_file.empty()) {

@@ -24,6 +24,10 @@ struct StartPlan {
   Eigen::Vector3d camera_up = Eigen::Vector3d::UnitZ();
 };
 
+// The region of interest: the given one, else the block's, else the bulk of the tie
+// points (2nd to 98th percentile per axis). Throws std::runtime_error when there is none.
+RegionOfInterest ChooseRegion(const ImageBlock& block, const std::optional<RegionOfInterest>& given);
+
 // Throws std::runtime_error when there is no region and no height to start from.
 StartPlan PlanStart(const ImageBlock& block, const ReconstructionOptions& options);
 
