@@ -148,9 +148,9 @@ TEST(ReconstructCli, ScenePresetSetsItsOptionsAndGivenOptionsWin) {
   EXPECT_EQ(one.find("stage v-cycle 1/2"), std::string::npos) << one;
 }
 
-// One image of the seed pair turned 180 degrees about its optical axis: its tie points
-// miss by hundreds of pixels, the other image is left alone with the region, and the run
-// stops before any work, naming both.
+// One image of the seed pair turned 180 degrees about its optical axis: it looks beside
+// the region (the frames are cut to it), its tie points miss by thousands of pixels, the
+// other image is left alone with the region, and the run stops before any work, naming both.
 TEST(ReconstructCli, RunStopsWhenOnlyOneImageSeesTheRegion) {
   const fs::path dir = fs::path(testing::TempDir()) / "facets_reconstruct_cli_one_image";
   fs::remove_all(dir);
@@ -168,10 +168,10 @@ TEST(ReconstructCli, RunStopsWhenOnlyOneImageSeesTheRegion) {
                    &out, &err),
             1);
   EXPECT_NE(err.find("error: geometry check: 0 of 2 images usable"), std::string::npos) << err;
-  EXPECT_NE(err.find("image 2 (img_01.png): its "), std::string::npos) << err;
+  EXPECT_NE(err.find("image 2 (img_01.png): it sees 0 of the region's"), std::string::npos) << err;
   EXPECT_NE(err.find("image 1 (img_00.png): no other usable image sees its region points"), std::string::npos)
       << err;
-  EXPECT_NE(out.find("warning: image 2 (img_01.png) dropped: its "), std::string::npos) << out;
+  EXPECT_NE(out.find("warning: image 2 (img_01.png) dropped: it sees 0"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir / "run" / "tin.ply"));
 }
 
