@@ -12,6 +12,7 @@
 #include <memory>
 #include <mutex>
 #include <new>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -21,6 +22,7 @@
 #include "apps/memory_preflight.h"
 #include "apps/reconstruct_options.h"
 #include "engine/pipeline/memory_estimate.h"
+#include "engine/pipeline/geometry_check.h"
 #include "engine/pipeline/products.h"
 #include "engine/pipeline/reconstruction.h"
 #include "engine/pipeline/radiometry_choice.h"
@@ -95,6 +97,15 @@ ImageBlock ReadBlock(const ReconstructAppSettings& app, const Say& say) {
   return block;
 }
 
+// --roi in the block's local coordinates; nullopt when not given.
+std::optional<RegionOfInterest> GivenRegion(const ReconstructAppSettings& app, const ImageBlock& block) {
+  if (app.roi.empty()) return std::nullopt;
+  RegionOfInterest roi = RegionFromNumbers(app.roi, "--roi");
+  roi.min -= block.origin;
+  roi.max -= block.origin;
+  return roi;
+}
+
 // The scene preset (given, or chosen from the cameras and tie points) over the library's
 // defaults, then the options given over the preset; line->app.scene becomes the preset used.
 void ChooseOptions(const ImageBlock& block, ReconstructCommandLine* line, const Say& say) {
@@ -155,12 +166,7 @@ void PrepareRun(const ImageBlock& block, const std::string& dir, ReconstructComm
   ReconstructionOptions& options = line->options;
   options.closed.write_start = (std::filesystem::path(dir) / "start.ply").string();
   PlaceLevelImages(block, app, dir, &options, say);
-  if (!app.roi.empty()) {
-    RegionOfInterest roi = RegionFromNumbers(app.roi, "--roi");
-    roi.min -= block.origin;
-    roi.max -= block.origin;
-    options.roi = roi;
-  }
+  options.roi = GivenRegion(app, block);
   options.progress = say;
   if (app.keep_levels) KeepLevels(dir, &options);
 }
@@ -227,11 +233,14 @@ void RunInto(const CLI::App& sub, ReconstructCommandLine* line, const std::strin
   }
   // Ray hits on triangle edges, and decisions that follow from them, can depend on the kernels.
   say("ray casting: " + EmbreeDevice::Shared().Describe());
-  const ImageBlock block = ReadBlock(app, say);
+  ImageBlock block = ReadBlock(app, say);
+  GeometryCheck geometry;
+  block = CheckedBlock(block, GivenRegion(app, block), say, &geometry);
   ChooseOptions(block, line, say);
   WriteFileAtomically((std::filesystem::path(dir) / "settings.ini").string(), SettingsFile(sub));
   PrepareRun(block, dir, line, say);
   Reconstruction result = Reconstruct(block, line->options);
+  result.report.geometry = std::move(geometry);
   WriteRunProducts(&result, block, *line, dir, start, say);
 }
 

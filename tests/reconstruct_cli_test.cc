@@ -1,7 +1,8 @@
 // `facets reconstruct` through the built binary: the help shows the user's options in
 // groups and the expert ones only with --help-all; bad values and unknown config keys
 // are errors naming them; a scene preset sets its options and those given win; the
-// settings.ini a run writes repeats it bit for bit through --config.
+// settings.ini a run writes repeats it bit for bit through --config; a block whose region
+// only one image sees stops with a non-zero exit.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -15,6 +16,7 @@
 #include <string>
 
 #include "io/folder_snapshot_for_testing.h"
+#include "io/colmap_io.h"
 
 namespace facets {
 namespace {
@@ -112,6 +114,8 @@ TEST(ReconstructCli, ScenePresetSetsItsOptionsAndGivenOptionsWin) {
     EXPECT_NE(aerial.find(set), std::string::npos) << set << "\n" << aerial;
   }
   EXPECT_NE(aerial.find("options given: levels=2"), std::string::npos) << aerial;
+  EXPECT_NE(aerial.find("geometry check: 2 of 2 images usable"), std::string::npos) << aerial;
+  EXPECT_NE(FileText(dir / "aerial" / "report.json").find("\"geometry_check\""), std::string::npos);
   EXPECT_NE(aerial.find("stage v-cycle 1/1"), std::string::npos);
   EXPECT_EQ(aerial.find("stage v-cycle 1/2"), std::string::npos);
   const std::string ini = FileText(dir / "aerial" / "settings.ini");
@@ -163,6 +167,33 @@ TEST(ReconstructCli, AJobThatCannotFitStopsAtOnceWithTheEstimate) {
     EXPECT_NE(err.find(part), std::string::npos) << part << "\n" << err;
   }
   EXPECT_EQ(out.find("stage images"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "run" / "tin.ply"));
+}
+
+// One image of the seed pair turned 180 degrees about its optical axis: it looks beside
+// the region (the frames are cut to it), its tie points miss by thousands of pixels, the
+// other image is left alone with the region, and the run stops before any work, naming both.
+TEST(ReconstructCli, RunStopsWhenOnlyOneImageSeesTheRegion) {
+  const fs::path dir = fs::path(testing::TempDir()) / "facets_reconstruct_cli_one_image";
+  fs::remove_all(dir);
+  const std::string scene = std::string(FACETS_SOURCE_DIR) + "/scenes/data/seed_gable_parallel.json";
+  ASSERT_EQ(Facets("render " + scene + " --out " + (dir / "scene").string()), 0);
+  ImageBlock block = ReadColmapModel((dir / "scene" / "sparse").string());
+  BlockImage& turned = block.images[1];
+  const Eigen::Vector3d centre = turned.ProjectionCentre();
+  turned.cam_from_world.rotation = Eigen::Quaterniond(0, 0, 0, 1) * turned.cam_from_world.rotation;
+  turned.cam_from_world.translation = -(turned.cam_from_world.rotation * centre);
+  WriteColmapModel(block, (dir / "turned").string());
+  std::string out, err;
+  EXPECT_EQ(Facets("reconstruct --colmap " + (dir / "turned").string() + " --images " +
+                       (dir / "scene" / "images").string() + " --levels 2 --out " + (dir / "run").string(),
+                   &out, &err),
+            1);
+  EXPECT_NE(err.find("error: geometry check: 0 of 2 images usable"), std::string::npos) << err;
+  EXPECT_NE(err.find("image 2 (img_01.png): it sees 0 of the region's"), std::string::npos) << err;
+  EXPECT_NE(err.find("image 1 (img_00.png): no other usable image sees its region points"), std::string::npos)
+      << err;
+  EXPECT_NE(out.find("warning: image 2 (img_01.png) dropped: it sees 0"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir / "run" / "tin.ply"));
 }
 

@@ -112,7 +112,7 @@ MemoryJob DescribeMemoryJob(const ImageBlock& block, const ReconstructionOptions
   job.tile_cache_mb = options.image_cache_mb;
   const bool closed = options.start_closed || !options.closed.mesh_file.empty();
   job.whole_images = options.adjustment.silhouette_weight > 0.0 || closed;
-  const RegionOfInterest roi = ChooseRoi(block, options);
+  const RegionOfInterest roi = ChooseRegion(block, options.roi);
   const Eigen::Vector3d size = (roi.max - roi.min).cwiseAbs();
   const double ground = size.x() * size.y(), front = size.x() * size.z(), side = size.y() * size.z();
   // Open surfaces: the largest face of the region (the ground, or a facade); closed

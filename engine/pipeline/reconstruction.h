@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "engine/solver/adjustment_options.h"
+#include "engine/pipeline/geometry_check.h"
 #include "engine/pipeline/level_windows.h"
 #include "engine/pipeline/run_profile.h"
 #include "engine/search/normal_search.h"
@@ -253,6 +254,8 @@ struct LevelReport {
 };
 
 struct ReconstructionReport {
+  // The block's geometry check (CheckedBlock) when its caller ran it: images empty otherwise.
+  GeometryCheck geometry;
   std::vector<LiftingTrial> lifting;
   double start_height = 0.0;
   std::string start_surface = "plane";  // or "tiepoints", "fitted plane"

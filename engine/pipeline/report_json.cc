@@ -1,6 +1,7 @@
 // ReconstructionReport as report.json and as one progress line.
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <sstream>
 
 #include "engine/pipeline/reconstruction.h"
@@ -196,6 +197,31 @@ json ProfileJson(const RunProfile& profile) {
   return j;
 }
 
+// Pixels as a number, null when not finite (JSON has no infinity).
+json Pixels(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
+
+json GeometryJson(const GeometryCheck& check) {
+  json j = {{"images", check.images.size()},
+            {"usable", check.UsableCount()},
+            {"region_points", check.region_points},
+            {"min_intersection_deg", check.min_intersection_deg},
+            {"observations", check.observations},
+            {"median_reprojection_px", Pixels(check.median_reprojection_px)},
+            {"typical_image_median_px", Pixels(check.typical_image_median_px)},
+            {"bad_image_median_px", Pixels(check.bad_image_median_px)}};
+  if (check.worst_image >= 0) {
+    const ImageGeometry& worst = check.images[check.worst_image];
+    j["worst_image"] = {{"image_id", worst.image_id},
+                        {"name", worst.name},
+                        {"median_reprojection_px", Pixels(worst.median_reprojection_px)}};
+  }
+  j["dropped"] = json::array();
+  for (const ImageGeometry& image : check.images) {
+    if (!image.Usable()) j["dropped"].push_back({{"image_id", image.image_id}, {"name", image.name}, {"problems", image.problems}});
+  }
+  return j;
+}
+
 }  // namespace
 
 std::string ReconstructionReport::BriefReport() const {
@@ -211,6 +237,7 @@ std::string ReconstructionReport::BriefReport() const {
 
 std::string ReconstructionReport::Json() const {
   json j = StartJson(*this);
+  if (!geometry.images.empty()) j["geometry_check"] = GeometryJson(geometry);
   long long observations = 0;
   int iterations = 0, cg = 0;
   for (const auto& level : levels) {

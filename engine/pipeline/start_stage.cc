@@ -23,8 +23,8 @@ double Percentile(std::vector<double> v, double q) {
 
 }  // namespace
 
-RegionOfInterest ChooseRoi(const ImageBlock& block, const ReconstructionOptions& options) {
-  if (options.roi) return *options.roi;
+RegionOfInterest ChooseRegion(const ImageBlock& block, const std::optional<RegionOfInterest>& given) {
+  if (given) return *given;
   if (block.roi) return *block.roi;
   if (block.points.size() >= 10) {
     // The bulk of the tie points: 2nd to 98th percentile, robust to a few blunders.
@@ -184,7 +184,7 @@ StartPlan PlanStart(const ImageBlock& block, const ReconstructionOptions& option
     if (options.progress) options.progress(line);
   };
   StartPlan plan;
-  plan.roi = ChooseRoi(block, options);
+  plan.roi = ChooseRegion(block, options.roi);
   plan.camera_up = CameraUp(block);
   // A closed start (objects) replaces the plane; its centre sets the ground pixel.
   if (options.start_closed || !options.closed.mesh_file.empty()) {

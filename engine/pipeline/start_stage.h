@@ -24,9 +24,9 @@ struct StartPlan {
   Eigen::Vector3d camera_up = Eigen::Vector3d::UnitZ();
 };
 
-// The region of the run: the options', the block's, else the bulk of the tie points
-// (2nd to 98th percentile). Throws std::runtime_error when there is none.
-RegionOfInterest ChooseRoi(const ImageBlock& block, const ReconstructionOptions& options);
+// The region of interest: the given one, else the block's, else the bulk of the tie
+// points (2nd to 98th percentile per axis). Throws std::runtime_error when there is none.
+RegionOfInterest ChooseRegion(const ImageBlock& block, const std::optional<RegionOfInterest>& given);
 // Median ground pixel of the original images at `centre` (m).
 double GroundPixel(const ImageBlock& block, const Eigen::Vector3d& centre);
 
