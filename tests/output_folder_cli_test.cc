@@ -65,7 +65,9 @@ pid_t Start(const std::vector<std::string>& args, const fs::path& log_stem) {
 // its work: the program is loaded and its signal handlers are in place).
 void WaitForTheTemporaryFolder(const fs::path& out, pid_t pid) {
   const std::string infix = ".facets-tmp-";
-  const std::string tail = "-" + std::to_string(pid) + "-";
+  std::string tail = "-";
+  tail += std::to_string(pid);
+  tail += "-";
   for (int poll = 0; poll < 12000; ++poll) {
     for (const auto& entry : fs::directory_iterator(out.parent_path())) {
       const std::string name = entry.path().filename().string();
