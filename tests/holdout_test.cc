@@ -88,7 +88,7 @@ double HeldOutZnccMedian(const RenderedScene& rendered, const MeshData& mesh, co
 }
 
 TEST(HoldoutRankingTest, TruthScoresAboveHalfAndTwoGsdDisplaced) {
-  const RenderedScene rendered = RenderAndRead("scenes/data/block_oblique.json", TempDir() + "/render");
+  const RenderedScene rendered = RenderAndRead("scenes/data/block_oblique.json");
   const double gsd = rendered.scene.ground_pixel_size;
   const MeshData truth = BuildTruthMesh(rendered.scene).ToMeshData();
   const MeshData half = Displaced(truth, 0.5 * gsd);
