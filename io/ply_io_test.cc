@@ -253,13 +253,13 @@ TEST(PlyIoTest, MalformedInputsThrowNamingFileAndProblem) {
        "property float y\nproperty float z\nend_header\n0 0 0\n",
        "need at least 6000000000 bytes"},
       {"list_past_end", header + "0 0 0\n1 0 0\n0 1 0\n200 0 1 2\n",
-       "face 0: list of 200 values runs past the end of its line"},
+       "face 0: bad list length 200 (the data left holds 3)"},
       {"truncated_list",
        "ply\nformat binary_little_endian 1.0\nelement vertex 0\nproperty float x\n"
        "property float y\nproperty float z\nelement face 1\nproperty list uint int vertex_indices\n"
        "end_header\n" +
            std::string("\x03\0\0\0\0\0\0\0", 8),
-       "face 0: list of 3 values runs past the end of the file"},
+       "face 0: bad list length 3 (the data left holds 1)"},
   };
   for (const Case& c : cases) {
     std::istringstream in(c.text);
@@ -299,9 +299,9 @@ TEST(PlyIoTest, CountsAndValuesBeyondTheDataAreErrors) {
   const std::vector<Case> cases = {
       // Reserving 10^12 vertices (24 TB) was attempted before the data was read.
       {"ascii_vertex_count", ascii + "element vertex 1000000000000\n" + xyz + "end_header\n" + three,
-       "truncated ascii data: expected 1000000000000 vertex lines, found 3"},
+       "header counts (1000000000000 vertex) need at least 6000000000000 bytes of data, but only 18 bytes"},
       {"binary_vertex_count", binary + "element vertex 4000000000\n" + xyz + "end_header\n" + floats,
-       "truncated binary data in vertex 3"},
+       "header counts (4000000000 vertex) need at least 48000000000 bytes of data, but only 36 bytes"},
       // A list count of 4e9 resized the face's index list to 32 GB.
       {"binary_list_length",
        binary + "element vertex 3\n" + xyz + "element face 1\nproperty list uint int vertex_indices\n" +
