@@ -99,13 +99,18 @@ int Facets(const std::vector<std::string>& args, const fs::path& log_stem, std::
 class OutputFolderCli : public testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new fs::path(fs::path(testing::TempDir()) / "facets_output_folder_cli");
+    // One folder per process: ctest runs the cases of this suite in parallel processes.
+    dir_ = new fs::path(fs::path(testing::TempDir()) / ("facets_output_folder_cli_" + std::to_string(getpid())));
     fs::remove_all(*dir_);
     fs::create_directories(*dir_);
     const std::string scene = std::string(FACETS_SOURCE_DIR) + "/scenes/data/seed_gable_parallel.json";
     ASSERT_EQ(Facets({"render", scene, "--out", (*dir_ / "scene").string()}, *dir_ / "render"), 0);
   }
-  static void TearDownTestSuite() { delete dir_; }
+  static void TearDownTestSuite() {
+    std::error_code ignored;
+    fs::remove_all(*dir_, ignored);
+    delete dir_;
+  }
 
   static std::vector<std::string> Reconstruct(const fs::path& out) {
     return {"reconstruct", "--colmap", (*dir_ / "scene" / "sparse").string(), "--images",
