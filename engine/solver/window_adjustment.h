@@ -23,6 +23,7 @@
 #include "io/camera.h"
 #include "io/image_io.h"
 #include "io/rigid3d.h"
+#include "mesh/surface_validity.h"
 #include "mesh/tessellation.h"
 #include "mesh/tin.h"
 #include "visibility/pixel_cast.h"
@@ -252,6 +253,8 @@ class WindowAdjustment {
   // Accumulate's shares, kept across iterations: fresh nnz-sized buffers every
   // iteration cost more in page faults than the sums themselves.
   std::vector<Share> shares_;
+  // The fold guard's crossing pairs of the current points, when its last test saw them.
+  KnownCrossings fold_crossings_;
   long long rejected_ = 0;
   long long downweighted_ = 0;
 
