@@ -116,19 +116,23 @@ VertexMoves MeasureVertexMoves(const TinMesh& mesh, const std::vector<Eigen::Vec
   return result;
 }
 
-int LimitFoldingSteps(TinMesh* mesh, const std::vector<Eigen::Vector3d>& before, int halvings) {
+int LimitFoldingSteps(TinMesh* mesh, const std::vector<Eigen::Vector3d>& before, int halvings,
+                      KnownCrossings* crossings) {
   const std::vector<Eigen::Vector3d> normals_before = FaceNormals(*mesh, before);
   std::vector<bool> folded_before(mesh->n_faces(), false);
   for (auto f : mesh->faces()) folded_before[f.idx()] = Folded(*mesh, normals_before, f);
-  const std::set<std::pair<int, int>> crossing_before = SelfIntersectingPairs(*mesh, before);
+  const std::set<std::pair<int, int>> crossing_before =
+      crossings && crossings->known ? std::move(crossings->pairs) : SelfIntersectingPairs(*mesh, before);
+  if (crossings) crossings->known = false;
   std::vector<bool> limited(mesh->n_vertices(), false);
   for (int round = 0; round <= halvings; ++round) {
     const std::vector<Eigen::Vector3d> points = Points(*mesh);
     const std::vector<Eigen::Vector3d> normals = FaceNormals(*mesh, points);
     std::vector<bool> shrink(mesh->n_vertices(), false);
     bool any = false;
+    std::set<std::pair<int, int>> crossing_now = SelfIntersectingPairs(*mesh, points);
     // Triangles that now cross where they did not before.
-    for (const auto& pair : SelfIntersectingPairs(*mesh, points)) {
+    for (const auto& pair : crossing_now) {
       if (crossing_before.count(pair)) continue;
       any = true;
       for (int f : {pair.first, pair.second}) {
@@ -142,7 +146,11 @@ int LimitFoldingSteps(TinMesh* mesh, const std::vector<Eigen::Vector3d>& before,
       any = true;
       for (auto v : mesh->fv_range(f)) shrink[v.idx()] = true;
     }
-    if (!any) break;
+    if (!any) {
+      // The points stay as tested: their pairs are the next step's `before` pairs.
+      if (crossings) *crossings = {std::move(crossing_now), true};
+      break;
+    }
     for (auto v : mesh->vertices()) {
       if (!shrink[v.idx()]) continue;
       limited[v.idx()] = true;

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <set>
+#include <utility>
 #include <vector>
 
 #include "mesh/tin.h"
@@ -25,7 +27,17 @@ int CountSelfIntersections(const TinMesh& mesh);
 // intersect now but did not before, mark their vertices; their
 // steps are halved, up to `halvings` times, and undone when the face is still bad.
 // Vertex normals are not updated (the caller does). Returns the vertices limited.
-int LimitFoldingSteps(TinMesh* mesh, const std::vector<Eigen::Vector3d>& before, int halvings = 4);
+// `crossings`, when given, carries the crossing face pairs from one step to the next of
+// the same mesh: read as the pairs of `before` when known, left as the pairs of the
+// final points when the last test saw them (no step needed halving after it), so a
+// sequence of steps tests crossings once per step instead of twice.
+struct KnownCrossings {
+  std::set<std::pair<int, int>> pairs;  // face index pairs, smaller index first
+  bool known = false;
+};
+constexpr int kFoldGuardHalvings = 4;
+int LimitFoldingSteps(TinMesh* mesh, const std::vector<Eigen::Vector3d>& before, int halvings = kFoldGuardHalvings,
+                      KnownCrossings* crossings = nullptr);
 
 // How far the vertices went from `before` (one point per vertex): those that moved at
 // least `least` (m), their median and largest move. For the reports of steps that

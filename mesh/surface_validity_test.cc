@@ -58,6 +58,33 @@ TEST(SurfaceValidity, VertexDraggedAcrossItsRingFoldsAndTheGuardUndoesIt) {
   EXPECT_LT(mesh.point(c)[0], 3.0);
 }
 
+// Two steps: the centre lifted 0.3 m (no fold), then dragged across its ring. The
+// crossings carried from the first step give the second the same decisions as testing
+// its start afresh.
+TEST(SurfaceValidity, CarriedCrossingsGiveTheSameGuardedSteps) {
+  TinMesh fresh = Grid();
+  TinMesh carried = Grid();
+  const auto c = Centre(fresh);
+  ASSERT_TRUE(c.is_valid());
+  KnownCrossings crossings;
+  std::vector<int> limited;
+  for (const Eigen::Vector3d& target : {Eigen::Vector3d(2.0, 2.0, 0.3), Eigen::Vector3d(3.5, 2.0, 0.3)}) {
+    const std::vector<Eigen::Vector3d> before = Points(fresh);
+    fresh.set_point(c, ToOpenMesh(target));
+    carried.set_point(c, ToOpenMesh(target));
+    const int limited_fresh = LimitFoldingSteps(&fresh, before);
+    const int limited_carried = LimitFoldingSteps(&carried, before, kFoldGuardHalvings, &crossings);
+    EXPECT_EQ(limited_carried, limited_fresh);
+    limited.push_back(limited_carried);
+    EXPECT_EQ(Points(carried), Points(fresh));
+    // Both steps end clean (the drag halved), so the last test's pairs are kept.
+    EXPECT_TRUE(crossings.known);
+    EXPECT_EQ(static_cast<int>(crossings.pairs.size()), CountSelfIntersections(carried));
+  }
+  EXPECT_EQ(limited[0], 0);
+  EXPECT_GT(limited[1], 0);
+}
+
 TEST(SurfaceValidity, UnseenVertexRelaxesToItsRing) {
   TinMesh mesh = Grid();
   const auto c = Centre(mesh);

@@ -283,6 +283,7 @@ void WindowAdjustment::PrepareRun(WindowReport* report) {
   if (!occluder_triangles_.empty()) scene_->SetOccluders(tess_, occluder_points_, occluder_triangles_);
   BuildTopologyTables();
   BuildPattern();
+  fold_crossings_ = {};  // the mesh may have changed since the last run
   if (options_.solver == WindowSolver::kLdlt) ldlt_.Analyze(normal_);
 }
 
@@ -363,7 +364,9 @@ double WindowAdjustment::UpdateUnknowns(const Eigen::VectorXd& solution, Iterati
       if (rad_unknown_[k][c][1] >= 0) radiometry_[k][c][1] += solution[rad_unknown_[k][c][1]];
     }
   }
-  if (options_.fold_guard) it->fold_limited = LimitFoldingSteps(mesh_, before);
+  if (options_.fold_guard) {
+    it->fold_limited = LimitFoldingSteps(mesh_, before, kFoldGuardHalvings, &fold_crossings_);
+  }
   UpdateVertexNormals(mesh_);
   if (options_.regularisation == Regularisation::kAdaptive) curvature_target_ = CurrentCurvatures();
   UpdateTessellationPoints(BuildPatches(*mesh_, ComputeCornerNormals(*mesh_, crease_edges_)), &tess_);

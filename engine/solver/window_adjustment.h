@@ -23,6 +23,7 @@
 #include "io/camera.h"
 #include "io/image_io.h"
 #include "io/rigid3d.h"
+#include "mesh/surface_validity.h"
 #include "mesh/tessellation.h"
 #include "mesh/tin.h"
 #include "visibility/pixel_cast.h"
@@ -147,8 +148,16 @@ class WindowAdjustment {
   const std::vector<double>& grey() const { return grey_; }
 
  private:
-  // One share of the sums of the normal equations (window_normal_equations.cc).
-  struct Share;
+  // One share of the sums of the normal equations (Accumulate): N's CSR values, the
+  // right-hand side A'Pl, l'Pl and the counts of its observations.
+  struct Share {
+    std::vector<double> values;  // zero between iterations (ReduceShares clears it)
+    Eigen::VectorXd rhs;
+    double lpl = 0.0;
+    long long count = 0;
+    long long rejected = 0;
+    long long downweighted = 0;
+  };
   // The normal equations of one iteration as far as the solve and sigma0 need them.
   struct Linearisation {
     Eigen::VectorXd rhs;
@@ -205,7 +214,7 @@ class WindowAdjustment {
   void AccumulateRadiometry(const std::array<int, 2>& rad_unknown, const int unknown[6], const double a[6],
                             const double a_rad[2], double w, double l, Share* share) const;
   // Sums the shares, in their order, into N and *rhs; returns l'Pl.
-  double ReduceShares(const std::vector<Share>& shares, Eigen::VectorXd* rhs, long long* count);
+  double ReduceShares(Eigen::VectorXd* rhs, long long* count);
   double AccumulateCurvature(Eigen::VectorXd* rhs, long long* count);
   // AdjustmentOptions::silhouette_weight: rim observations of the free vertices.
   double AccumulateSilhouette(Eigen::VectorXd* rhs, long long* count, long long* outside);
@@ -241,6 +250,11 @@ class WindowAdjustment {
   double robust_scale_ = 0.0;
   // Per image and observation of the last Accumulate: residual, displacement coefficient.
   std::vector<std::vector<std::array<float, 2>>> obs_terms_;
+  // Accumulate's shares, kept across iterations: fresh nnz-sized buffers every
+  // iteration cost more in page faults than the sums themselves.
+  std::vector<Share> shares_;
+  // The fold guard's crossing pairs of the current points, when its last test saw them.
+  KnownCrossings fold_crossings_;
   long long rejected_ = 0;
   long long downweighted_ = 0;
 

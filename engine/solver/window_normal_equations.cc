@@ -20,17 +20,6 @@ namespace facets {
 using window_internal::FacetLocalNodes;
 using window_internal::kLocal;
 
-// One share of the sums of the normal equations (Accumulate): N's CSR values, the
-// right-hand side A'Pl, l'Pl and the counts of its observations.
-struct WindowAdjustment::Share {
-  std::vector<double> values;
-  Eigen::VectorXd rhs;
-  double lpl = 0.0;
-  long long count = 0;
-  long long rejected = 0;
-  long long downweighted = 0;
-};
-
 double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservation>>& casts,
                                     Eigen::VectorXd* rhs, long long* count) {
   const int64_t nnz = normal_.nonZeros();
@@ -40,14 +29,19 @@ double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservati
   // differ in the last digits, and iterations, stall stops and fold-guard decisions
   // amplify that into visibly different surfaces).
   constexpr int kShares = 8;
-  std::vector<Share> shares(kShares);
-  for (Share& p : shares) {
-    p.values.assign(nnz, 0.0);
-    p.rhs = Eigen::VectorXd::Zero(num_unknowns_);
+  // The values stay allocated and zero between iterations (ReduceShares clears what it
+  // has added), so only a changed pattern allocates.
+  shares_.resize(kShares);
+  for (Share& p : shares_) {
+    if (static_cast<int64_t>(p.values.size()) != nnz) p.values.assign(nnz, 0.0);
+    p.rhs.setZero(num_unknowns_);
+    p.lpl = 0.0;
+    p.count = p.rejected = p.downweighted = 0;
   }
-  obs_terms_.assign(casts.size(), {});
+  obs_terms_.resize(casts.size());
   for (size_t k = 0; k < casts.size(); ++k) {
     const auto& observations = casts[k];
+    obs_terms_[k].clear();
     if (observations.empty()) continue;
     // Residual and grey-value change per unit displacement of the face, summed over
     // the channels; NaN: no observation (ResidualCorrelation).
@@ -58,10 +52,10 @@ double WindowAdjustment::Accumulate(const std::vector<std::vector<PixelObservati
     tbb::parallel_for(0, kShares, [&](int share) {
       const size_t first = std::min(observations.size(), share * run);
       const size_t last = std::min(observations.size(), first + run);
-      AccumulateRun(k, rays, observations, first, last, terms, &shares[share]);
+      AccumulateRun(k, rays, observations, first, last, terms, &shares_[share]);
     });
   }
-  return ReduceShares(shares, rhs, count);
+  return ReduceShares(rhs, count);
 }
 
 void WindowAdjustment::AccumulateRun(size_t k, const PixelRays& rays,
@@ -163,7 +157,7 @@ void WindowAdjustment::AccumulateRadiometry(const std::array<int, 2>& rad_unknow
   }
 }
 
-double WindowAdjustment::ReduceShares(const std::vector<Share>& shares, Eigen::VectorXd* rhs, long long* count) {
+double WindowAdjustment::ReduceShares(Eigen::VectorXd* rhs, long long* count) {
   const int64_t nnz = normal_.nonZeros();
   std::vector<double>& values = normal_.values();
   std::fill(values.begin(), values.end(), 0.0);
@@ -172,12 +166,15 @@ double WindowAdjustment::ReduceShares(const std::vector<Share>& shares, Eigen::V
   *count = 0;
   rejected_ = 0;
   downweighted_ = 0;
-  for (const Share& p : shares) {
+  for (Share& p : shares_) {
     rejected_ += p.rejected;
     downweighted_ += p.downweighted;
     tbb::parallel_for(tbb::blocked_range<int64_t>(0, nnz, 1 << 16),
                       [&](const tbb::blocked_range<int64_t>& range) {
-      for (int64_t i = range.begin(); i != range.end(); ++i) values[i] += p.values[i];
+      for (int64_t i = range.begin(); i != range.end(); ++i) {
+        values[i] += p.values[i];
+        p.values[i] = 0.0;  // ready for the next Accumulate
+      }
     });
     *rhs += p.rhs;
     lpl += p.lpl;
