@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Fuzzes the readers of user files (fuzz/: COLMAP text model, project JSON, PLY, the
 # --config file) with libFuzzer, AddressSanitizer and UndefinedBehaviorSanitizer:
-#   scripts/fuzz.sh [SECONDS_PER_TARGET]      (default 60; CI runs the default)
+#   scripts/fuzz.sh [SECONDS_PER_TARGET [TARGET...]]   (default 60 s, every target)
 # Builds in ./build-fuzz with clang (ccache when present), then runs each target for
 # SECONDS from its seed corpus fuzz/corpus/<target> (new inputs go to
 # build-fuzz/corpus/<target>, the seeds stay as they are). An input of at most 64 KiB
@@ -13,6 +13,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-60}
 targets=(fuzz_colmap fuzz_project fuzz_ply fuzz_config)
+if [ $# -gt 1 ]; then targets=("${@:2}"); fi
 build=build-fuzz
 if [ ! -f "$build/build.ninja" ]; then
   launcher=()
