@@ -63,6 +63,15 @@ function(facets_add_test name)
                LABELS ${ARG_LABEL} TIMEOUT ${ARG_TIMEOUT})
 endfunction()
 
+# facets_test_runs_cli(TEST_TARGET): the test runs the `facets` executable (FACETS_CLI
+# holds its path) and is built after it.
+function(facets_test_runs_cli name)
+  if(TARGET ${name})
+    target_compile_definitions(${name} PRIVATE FACETS_CLI="$<TARGET_FILE:facets>")
+    add_dependencies(${name} facets)
+  endif()
+endfunction()
+
 # facets_add_bench(NAME SRCS tests/bench/x_bench.cc DEPS x y)
 #   A benchmark executable (never run by CTest: tests do not time anything).
 function(facets_add_bench name)
