@@ -163,10 +163,13 @@ void RunWindow(const LevelRun& run, const std::vector<LevelImage>& seeing, int s
         sweep < run.free_margin_sweeps ? std::vector<bool>(wm->fixed.size(), false) : wm->fixed;
     std::vector<bool> judged(wm->fixed.size(), !run.many);
     for (int local : wm->owned_local) judged[local] = true;
-    // Per-vertex sigma is taken from the last sweep only: earlier sweeps skip the
-    // precision (one solve per geometry unknown).
+    // Per-vertex sigma and the residuals' correlation are taken from the last sweep
+    // only: earlier sweeps skip the precision (one solve per geometry unknown).
     AdjustmentOptions sweep_options = run.adjustment;
-    if (sweep + 1 < run.sweeps) sweep_options.compute_precision = false;
+    if (sweep + 1 < run.sweeps) {
+      sweep_options.compute_precision = false;
+      sweep_options.residual_correlation = false;
+    }
     result->report = RunWithCreasePass(&wm->mesh, seeing, sweep_options, fixed, judged, occluder_points,
                                        occluders, run.options.crease_second_pass, result);
     result->observed = true;

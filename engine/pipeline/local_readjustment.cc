@@ -34,6 +34,7 @@ LocalReadjustment ReadjustAroundMovedVertices(TinMesh* mesh, const TinMesh& befo
   AdjustmentOptions probe_adjustment = adjustment;
   probe_adjustment.max_iterations = 1;
   probe_adjustment.compute_precision = false;
+  probe_adjustment.residual_correlation = false;
   LevelWindowOptions probe_options = options;
   probe_options.sweeps = 1;
   probe_options.crease_second_pass = false;

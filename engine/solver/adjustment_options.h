@@ -136,6 +136,11 @@ struct AdjustmentOptions {
   // multiplied by the factor sum over pixel lags of rho_v(lag) x rho_a(lag), rho_v the
   // residuals' and rho_a the displacement coefficients' autocorrelation (docs/ENGINE.md).
   bool correlated_residuals = true;
+  // Measure that correlation at the end of a run (WindowReport::residual_rho_x/y and
+  // variance_factor; one pass over every observation's pixel neighbours). Off where the
+  // run's report only gives sigma0 (a trial's probes, the sweeps before a level's last):
+  // rho 0 and variance factor 1 then.
+  bool residual_correlation = true;
   int max_precision_unknowns = 60000;
   // A vertex is flagged undetermined when fewer images than this saw it, or its
   // standard deviation exceeds max_sigma (object units; 0 = no sigma test).

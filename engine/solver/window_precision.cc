@@ -97,7 +97,8 @@ void WindowAdjustment::FinishReport(const std::vector<std::vector<PixelObservati
   const int num_vertices = static_cast<int>(mesh_->n_vertices());
   report->vertex_views = VertexViews(casts);
 
-  const CorrelatedResiduals correlated = ResidualCorrelation(casts);
+  const CorrelatedResiduals correlated =
+      options_.residual_correlation ? ResidualCorrelation(casts) : CorrelatedResiduals{};
   report->residual_rho_x = correlated.rho_x;
   report->residual_rho_y = correlated.rho_y;
   report->variance_factor = options_.correlated_residuals ? correlated.variance_factor : 1.0;
