@@ -91,13 +91,15 @@ std::vector<Pose> BlockPoses(const CameraLayout& c, double f_px, int width, int 
   const Eigen::Vector2d dirs[4] = {{0, 1}, {1, 0}, {0, -1}, {-1, 0}};
   const double strip_base = c.oblique_base > 0 ? c.oblique_base : bx;
   for (int i = 0; i < c.obliques; ++i) {
-    // Across the viewing direction (to the camera's right), parallel axes.
+    // Across the viewing direction (to the camera's right); parallel axes or all aimed
+    // at the target.
     const Eigen::Vector3d across(dirs[i].y(), -dirs[i].x(), 0);
     for (int k = 0; k < c.oblique_strip; ++k) {
       const Eigen::Vector3d shift = (k - 0.5 * (c.oblique_strip - 1)) * strip_base * across;
       const Eigen::Vector3d centre(c.target.x() - d * dirs[i].x(),
                                    c.target.y() - d * dirs[i].y(), z_fly);
-      poses.push_back({centre + shift, ground_target + shift, Eigen::Vector3d::UnitZ()});
+      const Eigen::Vector3d target = c.oblique_convergent ? ground_target : ground_target + shift;
+      poses.push_back({centre + shift, target, Eigen::Vector3d::UnitZ()});
     }
   }
   return poses;

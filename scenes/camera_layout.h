@@ -20,7 +20,8 @@ Rigid3d LookAt(const Eigen::Vector3d& centre, const Eigen::Vector3d& target,
 // base (1 - overlap) * frame * flying_height / focal along X, centred on the target.
 // Block: rows x cols nadir images with forward (X) / side (Y) overlap, then obliques
 // tilted oblique_tilt_deg off nadir looking N, E, S, W (up to 4 directions) at the
-// target, oblique_strip of them per direction side by side (parallel axes).
+// target, oblique_strip of them per direction side by side (parallel axes, or all
+// aimed at the target with oblique_convergent).
 // Ring: cameras on rings around the target, looking at it. List: explicit cameras.
 // crop_to_roi: each frame is cut to the pixel box of the ROI corners plus a margin
 // (its own camera: the principal point moves, focal length stays).

@@ -116,6 +116,38 @@ TEST(RendererTest, NoiseOfConstantPatchMatchesSigma) {
   EXPECT_NEAR(sigma, 4.0, 0.4);
 }
 
+// A 10 m cube on flat ground, sun from the east at 45 degrees: ground 3 m west of the
+// cube lies in its shadow (the ray to the sun meets the west wall 3 m up), ground 15 m
+// west is lit (the ray passes 15 m up, above the 10 m roof).
+TEST(RendererTest, CastShadowsLeaveTheAmbientLightOnly) {
+  const std::string json = R"({
+    "name": "shadow", "ground_pixel_size": 0.1,
+    "region_of_interest": {"min": [-30, -10, -1], "max": [10, 10, 11]},
+    "surface": [{"type": "terrain", "length": 80, "width": 80},
+                {"type": "building", "roof": "flat", "length": 10, "width": 10, "height": 10}],
+    "sun": {"azimuth_deg": 90, "elevation_deg": 45, "ambient": 0.2, "cast_shadows": CAST},
+    "cameras": {"type": "list", "focal_mm": 10, "pixel_um": 10, "width": 200, "height": 150,
+                "cameras": [{"centre": [0,0,50], "target": [0,0,0]}]}})";
+  for (const bool cast : {false, true}) {
+    std::string text = json;
+    text.replace(text.find("CAST"), 4, cast ? "true" : "false");
+    std::istringstream in(text);
+    const Scene scene = ParseScene(in, "shadow");
+    const TruthMesh mesh = BuildTruthMesh(scene);
+    const Renderer renderer(scene, mesh);
+    const double lit = 0.2 + 0.8 * std::sqrt(0.5);  // ambient + (1 - ambient) sin 45 deg
+    for (const double x : {-8.0, -20.0}) {
+      const SurfaceHit hit = renderer.Cast(Eigen::Vector3d(x, 0, 50), -Eigen::Vector3d::UnitZ());
+      ASSERT_TRUE(hit.hit);
+      ASSERT_NEAR(hit.point.z(), 0, 1e-9);
+      const double albedo = renderer.albedo()(hit.point);
+      const bool in_shadow = cast && x == -8.0;
+      EXPECT_NEAR(renderer.Radiance(hit), 255 * albedo * (in_shadow ? 0.2 : lit), 1e-9)
+          << "x " << x << " cast_shadows " << cast;
+    }
+  }
+}
+
 TEST(RendererTest, TiePointsProjectOntoTheirObservations) {
   const Scene scene = LoadScene(DataPath("block.json"));
   const TruthMesh mesh = BuildTruthMesh(scene);

@@ -267,6 +267,10 @@ void ParseCameraAndFlight(const Field& f, CameraLayout* c) {
   Require(c->oblique_strip >= 1 && c->oblique_strip <= 9, f, "oblique_strip", "must be 1..9");
   c->oblique_base = f.Number("oblique_base", c->oblique_base);
   Require(c->oblique_base >= 0, f, "oblique_base", "must be >= 0");
+  const std::string axes = f.String("oblique_axes", "parallel");
+  Require(axes == "parallel" || axes == "convergent", f, "oblique_axes",
+          "expected 'parallel' or 'convergent'");
+  c->oblique_convergent = axes == "convergent";
 }
 
 // "rings" (ring layout) and "cameras" (list layout).
@@ -371,6 +375,7 @@ void ParseSun(const Field& s, SunOptions* sun) {
   sun->azimuth_deg = s.Number("azimuth_deg", sun->azimuth_deg);
   sun->elevation_deg = s.Number("elevation_deg", sun->elevation_deg);
   sun->ambient = s.Number("ambient", sun->ambient);
+  sun->cast_shadows = s.Bool("cast_shadows", sun->cast_shadows);
   Require(sun->ambient >= 0 && sun->ambient <= 1, s, "ambient", "must be in [0, 1]");
   Require(sun->elevation_deg > 0 && sun->elevation_deg <= 90, s, "elevation_deg",
           "must be in (0, 90]");

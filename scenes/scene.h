@@ -99,6 +99,8 @@ struct SunOptions {
   double azimuth_deg = 135;     // clockwise from +Y (north) towards +X (east)
   double elevation_deg = 50;
   double ambient = 0.2;         // share of diffuse sky light, 0..1
+  // Points whose ray towards the sun hits the surface get the ambient light only.
+  bool cast_shadows = false;
   Eigen::Vector3d Direction() const;  // unit vector towards the sun
 };
 
@@ -137,6 +139,9 @@ struct CameraLayout {
   // intersect a wall (its depth is then decided by the regularisation alone).
   int oblique_strip = 1;
   double oblique_base = 0;        // m
+  // Every oblique aimed at the target instead (a strip of cameras converging on the
+  // block centre, as when one camera is flown past it several times).
+  bool oblique_convergent = false;
   Eigen::Vector3d target = Eigen::Vector3d::Zero();  // block centre / ring target
   std::vector<RingSpec> rings;
   std::vector<ExplicitCamera> cameras;

@@ -23,6 +23,7 @@ TEST(SceneTest, BundledScenesLoadAndBuild) {
       {"seed_cylinder_parallel.json", 2}, {"seed_cylinder_parallel_patch.json", 2},
       {"seed_cylinder_rotated.json", 2}, {"seed_cylinder_rotated_patch.json", 2},
       {"block.json", 13},               {"block_oblique.json", 21},
+      {"block_tower.json", 21},         {"block_courtyard.json", 21},
       {"object.json", 20}};
   for (const auto& [file, images] : scenes) {
     const Scene scene = LoadScene(DataPath(file));
@@ -214,6 +215,39 @@ TEST(CameraLayoutTest, ObliqueStripHasParallelAxesSideBySide) {
       EXPECT_NEAR(step.dot(axis0), 0.0, 1e-9);  // side by side, across the view
       EXPECT_NEAR(step.z(), 0.0, 1e-9);
     }
+  }
+}
+
+TEST(CameraLayoutTest, ConvergentObliquesAimAtTheTarget) {
+  // block_tower.json: 9 nadir, then per direction three obliques 25 m apart, all aimed at
+  // the block centre on the ground: its image is the principal point of each.
+  const Scene scene = LoadScene(DataPath("block_tower.json"));
+  ASSERT_TRUE(scene.layout.oblique_convergent);
+  const ImageBlock block = BuildImageBlock(scene);
+  ASSERT_EQ(block.images.size(), 21u);
+  const Eigen::Vector3d target(0, 0, 0);
+  for (int dir = 0; dir < 4; ++dir) {
+    const BlockImage& first = block.images[9 + 3 * dir];
+    for (int k = 0; k < 3; ++k) {
+      const BlockImage& image = block.images[9 + 3 * dir + k];
+      const Camera& camera = block.CameraOf(image);
+      const Eigen::Vector2d px = camera.ImageFromCam(image.cam_from_world * target);
+      EXPECT_NEAR(px.x(), camera.PrincipalX(), 1e-6) << "direction " << dir << " camera " << k;
+      EXPECT_NEAR(px.y(), camera.PrincipalY(), 1e-6) << "direction " << dir << " camera " << k;
+      const Eigen::Vector3d step = image.ProjectionCentre() - first.ProjectionCentre();
+      EXPECT_NEAR(step.norm(), 25.0 * k, 1e-9);
+      EXPECT_NEAR(step.z(), 0.0, 1e-9);
+    }
+  }
+  std::istringstream bad(R"({"name": "b", "ground_pixel_size": 0.1,
+    "region_of_interest": {"min": [0, 0, 0], "max": [1, 1, 1]},
+    "surface": [{"type": "terrain"}],
+    "cameras": {"type": "block", "width": 100, "height": 100, "oblique_axes": "crossed"}})");
+  try {
+    ParseScene(bad, "bad.json");
+    FAIL() << "no error for oblique_axes 'crossed'";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "bad.json: /cameras/oblique_axes: expected 'parallel' or 'convergent'");
   }
 }
 
