@@ -225,7 +225,7 @@ TEST_F(BadBlock, ImageFilesBeforeGeometry) {
   Edit(Sparse("images.txt"), "2 1 0 0 0 -1 0 10 1 b.png", "2 1 0 0 0 -1 0 10000 1 b.png");
   ExpectRefused(ColmapInRegion(), {"geometry check: 0 of 2 images usable", "image 2 (b.png)"}, Out());
   fs::remove(dir_ / "images" / "b.png");
-  ExpectRefused(ColmapInRegion(), {"b.png", "image file not found"}, Out());
+  ExpectRefused(ColmapInRegion(), {"b.png", "not found"}, Out());
   EXPECT_EQ(RunFacets(ColmapInRegion()).err.find("geometry check"), std::string::npos);
   ImagePlanes small = NoiseImage();
   small.height = 24;
