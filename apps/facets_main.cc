@@ -38,6 +38,11 @@ int main(int argc, char** argv) {
               << "\n";
     return e.get_exit_code();
   } catch (const CLI::ParseError& e) {
+    const std::string config_value = facets::ConfigValueErrorMessage(app, e);
+    if (!config_value.empty()) {
+      std::cerr << "facets: " << config_value << "\n";
+      return e.get_exit_code();
+    }
     return app.exit(e);
   }
   return 0;

@@ -102,6 +102,53 @@ std::string ConfigErrorMessage(const CLI::App& app, const std::string& file, con
   return "config file " + file + ": " + UnknownConfigKey(KnownConfigKeys(app), error.substr(unknown.size()));
 }
 
+// The config file's item whose value, handed to its option again, fails with `error`:
+// CLI11 converts and checks a config value without saying where it came from.
+std::string ConfigValueErrorMessage(CLI::App& app, const CLI::ParseError& error) {
+  if (dynamic_cast<const CLI::ConversionError*>(&error) == nullptr &&
+      dynamic_cast<const CLI::ValidationError*>(&error) == nullptr) {
+    return "";
+  }
+  const std::vector<std::string> files = app.get_config_ptr()->results();
+  if (files.empty() || files.front().empty()) return "";
+  std::vector<CLI::ConfigItem> items;
+  try {
+    items = app.get_config_formatter()->from_file(files.front());
+  } catch (const CLI::Error&) {
+    return "";
+  }
+  for (const CLI::ConfigItem& item : items) {
+    if (item.parents.size() != 1 || item.name == "++" || item.name == "--") continue;
+    CLI::Option* option = nullptr;
+    try {
+      CLI::App* sub = app.get_subcommand(item.parents.front());
+      option = sub->get_option_no_throw("--" + item.name);
+      if (option == nullptr) option = sub->get_option_no_throw(item.name);
+    } catch (const CLI::Error&) {
+      continue;
+    }
+    if (option == nullptr) continue;
+    try {  // as CLI11 reads a config item (App::_parse_single_config)
+      option->clear();
+      if (option->get_expected_min() == 0) {
+        option->add_result(option->get_flag_value(item.name, app.get_config_formatter()->to_flag(item)));
+      } else {
+        option->add_result(item.inputs);
+      }
+      option->run_callback();
+    } catch (const CLI::ParseError& again) {
+      if (std::string(again.what()) != error.what()) continue;
+      std::string value;
+      for (const std::string& input : item.inputs) value += (value.empty() ? "" : " ") + input;
+      return "config file " + files.front() + ": key '" + item.name + "' in [" + item.parents.front() +
+             "]: bad value '" + value + "': " + error.what();
+    } catch (const std::exception&) {
+      continue;
+    }
+  }
+  return "";
+}
+
 CLI::Option* OptionBinder::Keep(CLI::Option* option) const {
   option->group(group_);
   if (record_) engine_options_->push_back(option);

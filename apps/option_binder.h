@@ -35,6 +35,11 @@ RegionOfInterest RegionFromNumbers(const std::vector<double>& numbers, const std
 // not able to parse reconstruct.lamda").
 std::string ConfigErrorMessage(const CLI::App& app, const std::string& file, const std::string& error);
 
+// A --config value that its option refuses, with the file, the key and its section (CLI11
+// says only "Could not convert: --levels = many"); "" when `error` is not about a value
+// of the config file. Sets the options again from the file's values (the parse failed).
+std::string ConfigValueErrorMessage(CLI::App& app, const CLI::ParseError& error);
+
 class OptionBinder {
  public:
   OptionBinder(CLI::App* app, std::vector<CLI::Option*>* engine_options) : app_(app), engine_options_(engine_options) {}

@@ -233,14 +233,15 @@ void RunInto(const CLI::App& sub, ReconstructCommandLine* line, const std::strin
   }
   // Ray hits on triangle edges, and decisions that follow from them, can depend on the kernels.
   say("ray casting: " + EmbreeDevice::Shared().Describe());
-  ImageBlock block = ReadBlock(app, say);
-  GeometryCheck geometry;
-  block = CheckedBlock(block, GivenRegion(app, block), say, &geometry);
+  const ImageBlock read_block = ReadBlock(app, say);
+  // The checks a library run makes in Reconstruct, made here before the options are chosen
+  // from the block (the preset, the memory estimate and the radiometry see the images kept).
+  const CheckedImageBlock checked = CheckBlock(read_block, GivenRegion(app, read_block), say);
+  const ImageBlock& block = checked.block;
   ChooseOptions(block, line, say);
   WriteFileAtomically((std::filesystem::path(dir) / "settings.ini").string(), SettingsFile(sub));
   PrepareRun(block, dir, line, say);
-  Reconstruction result = Reconstruct(block, line->options);
-  result.report.geometry = std::move(geometry);
+  Reconstruction result = Reconstruct(checked, line->options);
   WriteRunProducts(&result, block, *line, dir, start, say);
 }
 

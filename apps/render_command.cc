@@ -4,8 +4,11 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 
+#include "apps/stop_on_signal.h"
+#include "io/output_folder.h"
 #include "scenes/renderer.h"
 #include "scenes/scene.h"
 
@@ -20,6 +23,9 @@ struct RenderArgs {
   std::optional<int> supersampling;
 };
 
+// The scene into a temporary folder that replaces --out only when complete (as
+// reconstruct's output, io/output_folder.h); a failure or SIGINT/SIGTERM leaves --out as
+// it was. A folder holding files but none that a render writes is refused.
 void RunRender(const RenderArgs& args) {
   const Scene scene = LoadScene(args.scene);
   RenderOptions options;
@@ -29,12 +35,27 @@ void RunRender(const RenderArgs& args) {
   options.progress = [](int i, int n, const std::string& name) {
     std::cout << "image " << i << "/" << n << " " << name << "\n" << std::flush;
   };
-  std::cout << "rendering scene '" << scene.name << "' from " << args.scene << " into "
-            << args.out << "\n";
-  const RenderSummary s = RenderScene(scene, args.out, options);
-  std::cout << "done: " << s.images << " images, " << s.pixels << " pixels, " << s.triangles
-            << " truth triangles, " << s.tie_points << " tie points, " << s.render_seconds
-            << " s rendering, " << s.seconds << " s total\n";
+  CheckReplaceable(args.out, {"scene.json", "truth.json", "project.json"});
+  for (const std::string& stale : RemoveStaleTemporaryFolders(args.out)) {
+    std::cout << "removed " << stale << " (left by a run that was killed)\n";
+  }
+  OutputFolder output(args.out, OutputFolder::Start::kEmpty);
+  StopOnSignal stop([&](const std::string& signal) {
+    output.Abandon();
+    std::cerr << "facets render: error: stopped by " << signal << "\nfacets render: " << output.out()
+              << " is unchanged\n";
+  });
+  std::cout << "rendering scene '" << scene.name << "' from " << args.scene << " into " << args.out << "\n";
+  try {
+    const RenderSummary s = RenderSceneInto(scene, output.path(), options);
+    stop.Finish([&] { output.Commit(); });
+    std::cout << "done: " << s.images << " images, " << s.pixels << " pixels, " << s.triangles
+              << " truth triangles, " << s.tie_points << " tie points, " << s.render_seconds << " s rendering, "
+              << s.seconds << " s total\n";
+  } catch (const std::exception& e) {
+    stop.Finish([&] { output.Abandon(); });
+    throw std::runtime_error(output.InFinalNames(e.what()) + "\nfacets render: " + output.out() + " is unchanged");
+  }
 }
 
 }  // namespace

@@ -25,6 +25,37 @@ void OnSignal(int signal_number) {
   errno = saved;
 }
 
+// SIGINT and SIGTERM while no StopOnSignal holds them (from start-up, while the program
+// reads its arguments and inputs, until a command has an output to clean up, and after
+// it): no output is being written, so the process says it stopped and ends with
+// 128 + signal, as a stopped command does. Async-signal-safe: write and _exit only.
+void StopAtOnce(int signal_number) {
+  static constexpr char kInt[] = "facets: error: stopped by SIGINT\n";
+  static constexpr char kTerm[] = "facets: error: stopped by SIGTERM\n";
+  if (signal_number == SIGINT) {
+    [[maybe_unused]] const ssize_t ignored = ::write(STDERR_FILENO, kInt, sizeof(kInt) - 1);
+  } else {
+    [[maybe_unused]] const ssize_t ignored = ::write(STDERR_FILENO, kTerm, sizeof(kTerm) - 1);
+  }
+  ::_exit(128 + signal_number);
+}
+
+// Installed before main, by the executable's first initialiser (the shared libraries'
+// own run before it and cannot be covered). A caller may start facets with the two
+// signals blocked; a signal sent meanwhile waits and arrives here.
+[[gnu::constructor]] void InstallStopAtOnce() {
+  struct sigaction action {};
+  action.sa_handler = StopAtOnce;
+  sigemptyset(&action.sa_mask);
+  ::sigaction(SIGINT, &action, nullptr);
+  ::sigaction(SIGTERM, &action, nullptr);
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  ::sigprocmask(SIG_UNBLOCK, &signals, nullptr);
+}
+
 }  // namespace
 
 StopOnSignal::StopOnSignal(std::function<void(const std::string&)> on_stop) : on_stop_(std::move(on_stop)) {

@@ -3,7 +3,9 @@
 // and, unless the command has finished, calls on_stop (remove the temporary folder,
 // write the failure log, say so) and ends the process with status 128 + signal. The
 // command's own end takes the same lock (Finish), so a stop and a finished run never
-// report both, and a signal after the finish changes nothing.
+// report both, and a signal after the finish changes nothing. Outside a StopOnSignal (from
+// start-up on, before main), the two signals end the process at once with the same status
+// and "facets: error: stopped by SIGINT": nothing is being written then.
 #pragma once
 
 #include <functional>

@@ -11,6 +11,7 @@
 
 #include "io/atomic_file.h"
 #include "io/input_file.h"
+#include "io/tiff_strips.h"
 
 namespace facets {
 namespace {
@@ -23,22 +24,66 @@ std::string Lower(std::string s) {
   return s;
 }
 
+// Rows of an open image in a pixel type of the caller's choice, interleaved. Tiled files
+// are read a band of tile rows at a time (OpenImageIO 2.4.7's read_scanlines divides by
+// zero on them: SIGFPE); the last band is kept for the next rows. After each read the
+// decoder's messages are errors: a decoder that meets corrupt data may still return
+// true and fill the rest with grey or zeros (libjpeg on a truncated JPEG, libtiff on a
+// damaged LZW strip), and has_error() stays false there, only geterror() tells.
+class RowReader {
+ public:
+  RowReader(OIIO::ImageInput* in, std::string path) : in_(in), path_(std::move(path)) {}
+  const OIIO::ImageSpec& spec() const { return in_->spec(); }
+
+  void Read(int y0, int y1, OIIO::TypeDesc type, void* rows) {
+    const OIIO::ImageSpec& spec = in_->spec();
+    const size_t row_bytes = static_cast<size_t>(spec.width) * spec.nchannels * type.size();
+    bool ok = true;
+    if (spec.tile_width <= 0) {
+      ok = in_->read_scanlines(0, 0, y0, y1, 0, 0, spec.nchannels, type, rows);
+    } else {
+      for (int y = y0; y < y1; ++y) {
+        ok = HoldBand(y, type, row_bytes);
+        if (!ok) break;
+        std::copy_n(band_.data() + (y - band_y0_) * row_bytes, row_bytes,
+                    static_cast<char*>(rows) + (y - y0) * row_bytes);
+      }
+    }
+    const std::string error = in_->geterror();
+    if (!ok || !error.empty()) {
+      throw std::runtime_error(path_ + ": cannot decode the pixels of rows " + std::to_string(y0) + " to " +
+                               std::to_string(y1) + " (corrupt or truncated file)" +
+                               (error.empty() ? std::string() : ": " + error));
+    }
+  }
+
+ private:
+  // The band of tile rows holding row y in band_.
+  bool HoldBand(int y, OIIO::TypeDesc type, size_t row_bytes) {
+    if (y >= band_y0_ && y < band_y1_ && type == band_type_) return true;
+    const OIIO::ImageSpec& spec = in_->spec();
+    band_y0_ = y / spec.tile_height * spec.tile_height;
+    band_y1_ = std::min(spec.height, band_y0_ + spec.tile_height);
+    band_type_ = type;
+    band_.resize(row_bytes * (band_y1_ - band_y0_));
+    return in_->read_tiles(0, 0, 0, spec.width, band_y0_, band_y1_, 0, 1, 0, spec.nchannels, type, band_.data());
+  }
+
+  OIIO::ImageInput* in_;
+  std::string path_;
+  std::vector<char> band_;
+  int band_y0_ = 0, band_y1_ = 0;
+  OIIO::TypeDesc band_type_;
+};
+
 // Rows [y0, y1) of the open image, in the file's own type T (so values stay on its grey
 // scale: OIIO would normalise integers to 0..1 when converting to float), into rows
 // [y0, y1) of *image (plane-major, image->y0 = first row held).
 template <typename T>
-void ReadRowsAs(OIIO::ImageInput* in, OIIO::TypeDesc type, const std::string& path, int y0, int y1,
-                ImagePlanes* image) {
+void ReadRowsAs(RowReader* reader, OIIO::TypeDesc type, int y0, int y1, ImagePlanes* image) {
   const size_t row = static_cast<size_t>(image->width) * image->channels;
   std::vector<T> interleaved(row * (y1 - y0));
-  // A decoder that meets corrupt data may still return true and fill the rest with zeros
-  // (libtiff on a damaged deflate strip); its error is then only in has_error().
-  if (!in->read_scanlines(0, 0, y0, y1, 0, 0, image->channels, type, interleaved.data()) || in->has_error()) {
-    const std::string error = in->geterror();
-    throw std::runtime_error(path + ": cannot decode the pixels of rows " + std::to_string(y0) + " to " +
-                             std::to_string(y1) + " (corrupt or truncated file)" +
-                             (error.empty() ? std::string() : ": " + error));
-  }
+  reader->Read(y0, y1, type, interleaved.data());
   const int channels = image->channels;
   for (int c = 0; c < channels; ++c) {
     for (int y = y0; y < y1; ++y) {
@@ -49,17 +94,17 @@ void ReadRowsAs(OIIO::ImageInput* in, OIIO::TypeDesc type, const std::string& pa
   }
 }
 
-void ReadRows(OIIO::ImageInput* in, const std::string& path, int y0, int y1, ImagePlanes* image) {
+void ReadRows(RowReader* reader, int y0, int y1, ImagePlanes* image) {
   switch (image->bits) {
     case 8:
-      return ReadRowsAs<uint8_t>(in, OIIO::TypeDesc::UINT8, path, y0, y1, image);
+      return ReadRowsAs<uint8_t>(reader, OIIO::TypeDesc::UINT8, y0, y1, image);
     case 16:
-      if (in->spec().format.basetype == OIIO::TypeDesc::INT16) {
-        return ReadRowsAs<int16_t>(in, OIIO::TypeDesc::INT16, path, y0, y1, image);
+      if (reader->spec().format.basetype == OIIO::TypeDesc::INT16) {
+        return ReadRowsAs<int16_t>(reader, OIIO::TypeDesc::INT16, y0, y1, image);
       }
-      return ReadRowsAs<uint16_t>(in, OIIO::TypeDesc::UINT16, path, y0, y1, image);
+      return ReadRowsAs<uint16_t>(reader, OIIO::TypeDesc::UINT16, y0, y1, image);
     default:
-      return ReadRowsAs<float>(in, OIIO::TypeDesc::FLOAT, path, y0, y1, image);
+      return ReadRowsAs<float>(reader, OIIO::TypeDesc::FLOAT, y0, y1, image);
   }
 }
 
@@ -98,6 +143,12 @@ std::unique_ptr<OIIO::ImageInput> OpenImage(const std::string& path) {
   auto in = OIIO::ImageInput::open(path);
   if (!in) throw std::runtime_error(path + ": cannot read image: " + OIIO::geterror());
   return in;
+}
+
+// The open image, about to be decoded: a deflate TIFF's strips are decoded by libtiff
+// first (io/tiff_strips.h), as OpenImageIO would not report damage in them.
+void CheckBeforeDecoding(const OIIO::ImageInput& in, const std::string& path) {
+  if (std::string(in.format_name()) == "tiff") CheckDeflateTiffStrips(path);
 }
 
 // An empty image of the header's size holding rows [y0, y0 + rows).
@@ -166,7 +217,9 @@ ImagePlanes ReadImage(const std::string& path) {
   auto in = OpenImage(path);
   const ImageHeader header = HeaderOf(in->spec(), path);
   ImagePlanes image = RowsOf(header, 0, header.height);
-  ReadRows(in.get(), path, 0, header.height, &image);
+  CheckBeforeDecoding(*in, path);
+  RowReader reader(in.get(), path);
+  ReadRows(&reader, 0, header.height, &image);
   in->close();
   return image;
 }
@@ -178,6 +231,8 @@ void ForEachImageStrip(const std::string& path, int rows, int overlap,
   }
   auto in = OpenImage(path);
   const ImageHeader header = HeaderOf(in->spec(), path);
+  CheckBeforeDecoding(*in, path);
+  RowReader reader(in.get(), path);
   ImagePlanes previous;
   for (int y0 = 0; y0 < header.height; y0 += rows - overlap) {
     const int held = std::min(rows, header.height - y0);
@@ -188,7 +243,7 @@ void ForEachImageStrip(const std::string& path, int rows, int overlap,
     for (int c = 0; c < header.channels && shared > 0; ++c) {
       std::copy_n(previous.Row(c, y0), static_cast<size_t>(header.width) * shared, current.Row(c, y0));
     }
-    ReadRows(in.get(), path, y0 + shared, y0 + held, &current);
+    ReadRows(&reader, y0 + shared, y0 + held, &current);
     strip(current);
     if (y0 + held >= header.height) break;
     previous = std::move(current);
@@ -199,15 +254,22 @@ void ForEachImageStrip(const std::string& path, int rows, int overlap,
 // The camera's size is checked against the header before any pixel is read: a wrong or
 // damaged header must not size an allocation.
 ImagePlanes ReadImageFor(const std::string& path, const Camera& camera) {
+  CheckImageHeader(path, camera);
+  return ReadImage(path);
+}
+
+ImageHeader CheckImageHeader(const std::string& path, const Camera& camera) {
   const ImageHeader image = ReadImageHeader(path);
   if (image.width != camera.width || image.height != camera.height) {
-    throw std::runtime_error(path + ": image is " + std::to_string(image.width) + "x" +
-                             std::to_string(image.height) + " pixels but camera " +
-                             std::to_string(camera.camera_id) + " expects " +
-                             std::to_string(camera.width) + "x" +
-                             std::to_string(camera.height));
+    throw std::runtime_error(path + ": image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                             " pixels but camera " + std::to_string(camera.camera_id) + " expects " +
+                             std::to_string(camera.width) + "x" + std::to_string(camera.height));
   }
-  return ReadImage(path);
+  return image;
+}
+
+void CheckImageHeaders(const ImageBlock& block) {
+  for (const BlockImage& image : block.images) CheckImageHeader(image.path, block.CameraOf(image));
 }
 
 void WriteImage(const std::string& path, const ImagePlanes& image, int bits) {

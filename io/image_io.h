@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "io/camera.h"
+#include "io/image_block.h"
 
 namespace facets {
 
@@ -61,6 +62,12 @@ void ForEachImageStrip(const std::string& path, int rows, int overlap,
                        const std::function<void(const ImagePlanes&)>& strip);
 // Reads and checks width/height against the camera; error names file, both sizes.
 ImagePlanes ReadImageFor(const std::string& path, const Camera& camera);
+// The header of the image at `path`, checked as ReadImageFor checks it (no pixel decoded).
+ImageHeader CheckImageHeader(const std::string& path, const Camera& camera);
+// CheckImageHeader for every image of the block, in block order: throws
+// std::runtime_error naming the first file that is missing, not an image, or not of its
+// camera's size.
+void CheckImageHeaders(const ImageBlock& block);
 // Writes via OpenImageIO (format from extension: .png .tif .jpg ...); bits 8 or 16
 // (values are rounded and clamped) or 32 (float TIFF). Temp name + rename.
 void WriteImage(const std::string& path, const ImagePlanes& image, int bits = 8);

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <stdexcept>
 
 #include "io/shared_data_for_testing.h"
@@ -254,6 +255,89 @@ TEST_F(ImageIoTest, ErrorsNameTheFile) {
     EXPECT_NE(what.find(Path("small.png")), std::string::npos);
     EXPECT_NE(what.find("64x48"), std::string::npos);
     EXPECT_NE(what.find("64x49"), std::string::npos);
+  }
+}
+
+// A grey ramp with 3 bits of noise (a linear congruential sequence), written by
+// OpenImageIO with `compression` and, when `tile` > 0, in tiles of tile x tile pixels:
+// compressible enough to be coded (pure noise is stored), long enough to damage.
+ImagePlanes WriteNoisy(const std::string& path, int width, int height, const std::string& compression, int tile) {
+  ImagePlanes image;
+  image.width = width;
+  image.height = height;
+  image.channels = 1;
+  image.data.resize(static_cast<size_t>(width) * height);
+  std::vector<uint8_t> pixels(image.data.size());
+  uint32_t state = 12345;
+  for (size_t i = 0; i < pixels.size(); ++i) {
+    state = state * 1664525u + 1013904223u;
+    pixels[i] = static_cast<uint8_t>((i % width * 3 + i / width * 2 + (state >> 29)) % 256);
+    image.data[i] = pixels[i];
+  }
+  auto out = OIIO::ImageOutput::create(path);
+  EXPECT_TRUE(out) << path;
+  OIIO::ImageSpec spec(width, height, 1, OIIO::TypeDesc::UINT8);
+  if (!compression.empty()) spec.attribute("compression", compression);
+  if (tile > 0) spec.tile_width = spec.tile_height = tile;
+  EXPECT_TRUE(out->open(path, spec)) << out->geterror();
+  EXPECT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, pixels.data())) << out->geterror();
+  out->close();
+  return image;
+}
+
+// Tiled TIFFs (OpenImageIO 2.4.7's read_scanlines divides by zero on them) read whole
+// and in strips that do not line up with the tiles, the last tile row and column partial.
+TEST_F(ImageIoTest, ReadsTiledTiffs) {
+  const ImagePlanes expected = WriteNoisy(Path("tiled.tif"), 53, 45, "zip", 16);
+  ASSERT_EQ(OIIO::ImageInput::open(Path("tiled.tif"))->spec().tile_width, 16);
+  ExpectSamePixels(expected, ReadImage(Path("tiled.tif")));
+  int wrong = 0, rows = 0;
+  ForEachImageStrip(Path("tiled.tif"), 10, 3, [&](const ImagePlanes& strip) {
+    for (int y = strip.y0; y < strip.y0 + strip.height; ++y, ++rows)
+      for (int x = 0; x < strip.width; ++x) wrong += strip.at(0, x, y) != expected.at(0, x, y);
+  });
+  EXPECT_EQ(rows, 45 + 3 * 5);  // 6 strips starting 7 rows apart, 5 overlaps of 3 rows
+  EXPECT_EQ(wrong, 0);
+}
+
+// Damaged image data is an error naming the file, for every compressed format: bytes
+// flipped in the middle of the file (the coded pixels; the header stays whole) and the
+// file cut in half. OpenImageIO returns true for most of them (libjpeg fills with grey,
+// libtiff's LZW and OpenImageIO's own inflate of deflate strips with zeros).
+TEST_F(ImageIoTest, DamagedPixelsAreErrors) {
+  struct Case {
+    const char* name;
+    const char* compression;
+    int tile;
+  };
+  const Case cases[] = {{"zip.tif", "zip", 0},  {"lzw.tif", "lzw", 0}, {"tiles.tif", "zip", 64},
+                        {"plain.png", "", 0},    {"plain.jpg", "", 0}};
+  for (const Case& c : cases) {
+    for (const bool cut : {false, true}) {
+      const std::string path = Path(std::string(cut ? "cut_" : "flipped_") + c.name);
+      WriteNoisy(path, 256, 256, c.compression, c.tile);
+      std::string bytes;
+      {
+        std::ifstream in(path, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+      }
+      if (cut) {
+        bytes.resize(bytes.size() / 2);
+      } else {
+        for (size_t k = bytes.size() * 2 / 5; k < bytes.size() / 2; ++k) bytes[k] ^= 0x5A;
+      }
+      std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+      try {
+        ReadImage(path);
+        ADD_FAILURE() << path << " read without an error";
+      } catch (const std::runtime_error& e) {
+        const std::string what = e.what();
+        std::cout << "  " << what.substr(0, 240) << "\n";
+        EXPECT_NE(what.find(path + ": cannot decode the pixels"), std::string::npos) << what;
+      }
+      int strips = 0;
+      EXPECT_THROW(ForEachImageStrip(path, 64, 0, [&](const ImagePlanes&) { ++strips; }), std::runtime_error) << path;
+    }
   }
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <set>
@@ -23,6 +24,8 @@ using nlohmann::json;
 // "block.json: images[3].omega is not a number".
 class Reader {
  public:
+  static constexpr unsigned long long kMaxLongLong = std::numeric_limits<long long>::max();
+
   explicit Reader(std::string file) : file_(std::move(file)) {}
 
   [[noreturn]] void Fail(const std::string& path, const std::string& message) const {
@@ -67,7 +70,20 @@ class Reader {
   }
   long long Integer(const json& value, const std::string& path) const {
     if (!value.is_number_integer()) Fail(path, "is not an integer");
+    if (value.is_number_unsigned() && value.get<unsigned long long>() > kMaxLongLong) {
+      Fail(path, "is " + value.dump() + ", too large");
+    }
     return value.get<long long>();
+  }
+  // An integer that is an id, index or size: within lo..INT_MAX, as the block stores them
+  // in ints (a larger one would wrap: 4294967297 would become 1).
+  int Int(const json& value, const std::string& path, long long lo = 0) const {
+    const long long v = Integer(value, path);
+    if (v < lo || v > std::numeric_limits<int>::max()) {
+      Fail(path, "is " + std::to_string(v) + ", outside " + std::to_string(lo) + ".." +
+                     std::to_string(std::numeric_limits<int>::max()));
+    }
+    return static_cast<int>(v);
   }
   std::string String(const json& value, const std::string& path) const {
     if (!value.is_string()) Fail(path, "is not a string");
@@ -117,7 +133,7 @@ Camera ReadCamera(const Reader& r, const json& node, const std::string& path) {
   r.KnownKeys(node, path,
               {"id", "model", "focal_length_mm", "pixel_size_um", "principal_point_offset_mm",
                "width_px", "height_px", "distortion"});
-  const int id = static_cast<int>(r.Integer(r.Field(node, path, "id"), Reader::Join(path, "id")));
+  const int id = r.Int(r.Field(node, path, "id"), Reader::Join(path, "id"));
   CameraModel model = CameraModel::kPinhole;
   if (const json* m = r.Optional(node, "model")) {
     const std::string name = r.String(*m, Reader::Join(path, "model"));
@@ -154,12 +170,8 @@ Camera ReadCamera(const Reader& r, const json& node, const std::string& path) {
     x0_mm = r.Number((*pp)[0], Reader::Index(pp_path, 0));
     y0_mm = r.Number((*pp)[1], Reader::Index(pp_path, 1));
   }
-  const int width =
-      static_cast<int>(r.Integer(r.Field(node, path, "width_px"), Reader::Join(path, "width_px")));
-  const int height = static_cast<int>(
-      r.Integer(r.Field(node, path, "height_px"), Reader::Join(path, "height_px")));
-  if (width <= 0) r.Fail(Reader::Join(path, "width_px"), "must be positive");
-  if (height <= 0) r.Fail(Reader::Join(path, "height_px"), "must be positive");
+  const int width = r.Int(r.Field(node, path, "width_px"), Reader::Join(path, "width_px"), 1);
+  const int height = r.Int(r.Field(node, path, "height_px"), Reader::Join(path, "height_px"), 1);
 
   Camera camera = Camera::Create(model, fx_mm * px_per_mm, fy_mm * px_per_mm,
                                  0.5 * width + x0_mm * px_per_mm,
@@ -221,15 +233,13 @@ BlockImage ReadImage(const Reader& r, const json& node, const std::string& ipath
   r.KnownKeys(node, ipath,
               {"id", "path", "camera", "projection_centre", "omega", "phi", "kappa"});
   BlockImage image;
-  image.image_id =
-      static_cast<int>(r.Integer(r.Field(node, ipath, "id"), Reader::Join(ipath, "id")));
+  image.image_id = r.Int(r.Field(node, ipath, "id"), Reader::Join(ipath, "id"));
   if (!image_ids->insert(image.image_id).second) {
     r.Fail(ipath + ".id", "duplicates image id " + std::to_string(image.image_id));
   }
   image.name = r.String(r.Field(node, ipath, "path"), Reader::Join(ipath, "path"));
   image.path = (dir / image.name).lexically_normal().string();
-  image.camera_id = static_cast<int>(
-      r.Integer(r.Field(node, ipath, "camera"), Reader::Join(ipath, "camera")));
+  image.camera_id = r.Int(r.Field(node, ipath, "camera"), Reader::Join(ipath, "camera"));
   if (!block.cameras.count(image.camera_id)) {
     r.Fail(ipath + ".camera", "refers to unknown camera " + std::to_string(image.camera_id));
   }
@@ -266,8 +276,8 @@ std::vector<TrackElement> ReadTrack(const Reader& r, const json& track, const st
     const json& e = track[k];
     if (!e.is_array() || e.size() != 2) r.Fail(epath, "is not [image_id, point2d_idx]");
     TrackElement element;
-    element.image_id = static_cast<int>(r.Integer(e[0], epath + "[0]"));
-    element.point2d_idx = static_cast<int>(r.Integer(e[1], epath + "[1]"));
+    element.image_id = r.Int(e[0], epath + "[0]");
+    element.point2d_idx = r.Int(e[1], epath + "[1]");
     if (!image_ids.count(element.image_id)) {
       r.Fail(epath + "[0]", "refers to unknown image " + std::to_string(element.image_id));
     }
@@ -283,6 +293,7 @@ TiePoint ReadTiePoint(const Reader& r, const json& node, const std::string& ppat
   r.KnownKeys(node, ppath, {"id", "xyz", "rgb", "error", "track"});
   TiePoint point;
   point.point3d_id = r.Integer(r.Field(node, ppath, "id"), ppath + ".id");
+  if (point.point3d_id < 0) r.Fail(ppath + ".id", "is negative");
   if (!point_ids->insert(point.point3d_id).second) {
     r.Fail(ppath + ".id", "duplicates tie point id " + std::to_string(point.point3d_id));
   }
@@ -290,7 +301,7 @@ TiePoint ReadTiePoint(const Reader& r, const json& node, const std::string& ppat
   if (const json* rgb = r.Optional(node, "rgb")) {
     if (!rgb->is_array() || rgb->size() != 3) r.Fail(ppath + ".rgb", "is not [r, g, b]");
     for (int c = 0; c < 3; ++c) {
-      point.rgb[c] = static_cast<int>(r.Integer((*rgb)[c], Reader::Index(ppath + ".rgb", c)));
+      point.rgb[c] = r.Int((*rgb)[c], Reader::Index(ppath + ".rgb", c));
     }
   }
   if (const json* e = r.Optional(node, "error")) point.error = r.Number(*e, ppath + ".error");

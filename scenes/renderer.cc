@@ -2,7 +2,6 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
@@ -13,6 +12,7 @@
 
 #include "io/colmap_io.h"
 #include "io/image_io.h"
+#include "io/output_folder.h"
 #include "io/ply_io.h"
 #include "io/project_io.h"
 #include "scenes/camera_layout.h"
@@ -294,15 +294,9 @@ void WriteTruthJson(const Scene& scene, const ImageBlock& block, const TruthMesh
   if (!out) throw std::runtime_error(path + ": cannot write");
 }
 
-std::string TempSuffix() {
-  std::random_device rd;
-  return std::to_string(getpid()) + "-" + std::to_string(rd() % 100000);
-}
-
 }  // namespace
 
-RenderSummary RenderScene(const Scene& scene_in, const std::string& out_dir,
-                          const RenderOptions& options) {
+RenderSummary RenderSceneInto(const Scene& scene_in, const std::string& dir, const RenderOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   Scene scene = scene_in;
   if (options.seed) scene.seed = *options.seed;
@@ -321,57 +315,51 @@ RenderSummary RenderScene(const Scene& scene_in, const std::string& out_dir,
   summary.tie_points =
       SampleTiePoints(scene, mesh, renderer, static_cast<uint32_t>(scene.seed) * 7u + 1u, &block);
 
-  fs::path out(out_dir);
-  if (out.filename().empty()) out = out.parent_path();
-  const fs::path tmp = out.string() + ".tmp-" + TempSuffix();
-  fs::create_directories(tmp / "images");
-  try {
-    for (size_t i = 0; i < block.images.size(); ++i) {
-      BlockImage& image = block.images[i];
-      const Camera& camera = block.CameraOf(image);
-      const auto r0 = std::chrono::steady_clock::now();
-      const std::vector<float> clean = renderer.RenderClean(camera, image, scene.supersampling);
-      summary.render_seconds +=
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
-      const std::vector<uint8_t> grey = AddNoiseAndQuantise(
-          clean, scene.noise_sigma,
-          static_cast<uint32_t>(scene.seed) * 1000003u + static_cast<uint32_t>(image.image_id));
-      ImagePlanes planes;
-      planes.width = camera.width;
-      planes.height = camera.height;
-      planes.channels = 1;
-      planes.bits = 8;
-      planes.data.assign(grey.begin(), grey.end());
-      // Path inside the temp folder: the project file stores it relative to itself.
-      image.path = (tmp / "images" / image.name).string();
-      WriteImage(image.path, planes, 8);
-      summary.pixels += static_cast<long long>(camera.width) * camera.height;
-      ++summary.images;
-      if (options.progress) options.progress(static_cast<int>(i) + 1, static_cast<int>(block.images.size()), image.name);
-    }
-    WriteColmapModel(block, (tmp / "sparse").string());
-    WriteProject(block, (tmp / "project.json").string());
-    WritePly((tmp / "truth.ply").string(), mesh.ToMeshData());
-    WriteTruthJson(scene, block, mesh, (tmp / "truth.json").string());
-    {
-      std::ofstream copy(tmp / "scene.json");
-      copy << scene.json.dump(2) << "\n";
-      if (!copy) throw std::runtime_error((tmp / "scene.json").string() + ": cannot write");
-    }
-    // Swap in the finished folder: the old output (if any) is removed only after.
-    fs::path old;
-    if (fs::exists(out)) {
-      old = out.string() + ".old-" + TempSuffix();
-      fs::rename(out, old);
-    }
-    fs::rename(tmp, out);
-    if (!old.empty()) fs::remove_all(old);
-  } catch (...) {
-    std::error_code ec;
-    fs::remove_all(tmp, ec);
-    throw;
+  const fs::path out(dir);
+  fs::create_directories(out / "images");
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    BlockImage& image = block.images[i];
+    const Camera& camera = block.CameraOf(image);
+    const auto r0 = std::chrono::steady_clock::now();
+    const std::vector<float> clean = renderer.RenderClean(camera, image, scene.supersampling);
+    summary.render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
+    const std::vector<uint8_t> grey = AddNoiseAndQuantise(
+        clean, scene.noise_sigma, static_cast<uint32_t>(scene.seed) * 1000003u + static_cast<uint32_t>(image.image_id));
+    ImagePlanes planes;
+    planes.width = camera.width;
+    planes.height = camera.height;
+    planes.channels = 1;
+    planes.bits = 8;
+    planes.data.assign(grey.begin(), grey.end());
+    // The project file stores the path relative to itself.
+    image.path = (out / "images" / image.name).string();
+    WriteImage(image.path, planes, 8);
+    summary.pixels += static_cast<long long>(camera.width) * camera.height;
+    ++summary.images;
+    if (options.progress) options.progress(static_cast<int>(i) + 1, static_cast<int>(block.images.size()), image.name);
+  }
+  WriteColmapModel(block, (out / "sparse").string());
+  WriteProject(block, (out / "project.json").string());
+  WritePly((out / "truth.ply").string(), mesh.ToMeshData());
+  WriteTruthJson(scene, block, mesh, (out / "truth.json").string());
+  {
+    std::ofstream copy(out / "scene.json");
+    copy << scene.json.dump(2) << "\n";
+    if (!copy) throw std::runtime_error((out / "scene.json").string() + ": cannot write");
   }
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return summary;
+}
+
+RenderSummary RenderScene(const Scene& scene, const std::string& out_dir, const RenderOptions& options) {
+  OutputFolder output(out_dir, OutputFolder::Start::kEmpty);
+  RenderSummary summary;
+  try {
+    summary = RenderSceneInto(scene, output.path(), options);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(output.InFinalNames(e.what()));
+  }
+  output.Commit();
   return summary;
 }
 

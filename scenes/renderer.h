@@ -88,10 +88,14 @@ struct RenderSummary {
   double render_seconds = 0; // ray casting and shading only
 };
 
-// Writes into out_dir (built in a sibling temp folder, renamed at the end; an existing
-// out_dir is replaced): images/img_NN.png, sparse/{cameras,images,points3D}.txt,
-// project.json, truth.ply (face labels), truth.json, scene.json.
-RenderSummary RenderScene(const Scene& scene, const std::string& out_dir,
-                          const RenderOptions& options = {});
+// Writes into the folder `dir` (created when missing): images/img_NN.png,
+// sparse/{cameras,images,points3D}.txt, project.json, truth.ply (face labels),
+// truth.json, scene.json.
+RenderSummary RenderSceneInto(const Scene& scene, const std::string& dir, const RenderOptions& options = {});
+
+// RenderSceneInto out_dir as a unit (io/output_folder.h): written into a temporary folder
+// beside it that replaces out_dir (a previous output as a whole) only when complete; a
+// failure leaves out_dir as it was.
+RenderSummary RenderScene(const Scene& scene, const std::string& out_dir, const RenderOptions& options = {});
 
 }  // namespace facets

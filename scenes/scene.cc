@@ -1,5 +1,6 @@
 #include "scenes/scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -14,22 +15,53 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
+// The keys the parser looked for in each object it read (every read of a key, optional
+// ones too, asks Field::Has first). Any other key of those objects is unknown: a misspelt
+// optional key would otherwise be dropped without a word.
+class AskedKeys {
+ public:
+  void Ask(const nlohmann::json& object, const std::string& path, const std::string& key) {
+    auto it = std::find_if(objects_.begin(), objects_.end(), [&](const Object& o) { return o.json == &object; });
+    if (it == objects_.end()) it = objects_.insert(objects_.end(), Object{&object, path, {}});
+    if (std::find(it->keys.begin(), it->keys.end(), key) == it->keys.end()) it->keys.push_back(key);
+  }
+  // Throws std::invalid_argument naming the file, the object, the key and the nearest known one.
+  void RefuseOthers(const std::string& source) const {
+    for (const Object& object : objects_) {
+      for (const auto& item : object.json->items()) {
+        if (std::find(object.keys.begin(), object.keys.end(), item.key()) != object.keys.end()) continue;
+        throw std::invalid_argument(source + ": " + (object.path.empty() ? "top level" : object.path) + ": " +
+                                    UnknownKeyMessage(item.key(), object.keys));
+      }
+    }
+  }
+
+ private:
+  struct Object {
+    const nlohmann::json* json;
+    std::string path;
+    std::vector<std::string> keys;
+  };
+  std::vector<Object> objects_;  // in the order first read
+};
+
 // Reads fields of one JSON object and names the file and JSON pointer on error.
 class Field {
  public:
-  Field(const nlohmann::json& j, std::string source, std::string path)
-      : j_(j), source_(std::move(source)), path_(std::move(path)) {}
+  Field(const nlohmann::json& j, std::string source, std::string path, AskedKeys* asked)
+      : j_(j), source_(std::move(source)), path_(std::move(path)), asked_(asked) {}
 
   [[noreturn]] void Fail(const std::string& key, const std::string& what) const {
     throw std::invalid_argument(source_ + ": " + path_ + "/" + key + ": " + what);
   }
-  bool Has(const std::string& key) const { return j_.is_object() && j_.contains(key); }
+  bool Has(const std::string& key) const {
+    if (!j_.is_object()) return false;
+    asked_->Ask(j_, path_, key);
+    return j_.contains(key);
+  }
   Field Child(const std::string& key) const {
     if (!Has(key)) Fail(key, "missing");
-    return Field(j_.at(key), source_, path_ + "/" + key);
-  }
-  Field Element(size_t i) const {
-    return Field(j_.at(i), source_, path_ + "/" + std::to_string(i));
+    return Field(j_.at(key), source_, path_ + "/" + key, asked_);
   }
   const nlohmann::json& json() const { return j_; }
   const std::string& path() const { return path_; }
@@ -103,7 +135,7 @@ class Field {
       if (!v[i].is_object() && !v[i].is_array()) {
         Fail(key + "/" + std::to_string(i), "expected an object");
       }
-      out.emplace_back(v[i], source_, path_ + "/" + key + "/" + std::to_string(i));
+      out.emplace_back(v[i], source_, path_ + "/" + key + "/" + std::to_string(i), asked_);
     }
     return out;
   }
@@ -112,6 +144,7 @@ class Field {
   const nlohmann::json& j_;
   std::string source_;
   std::string path_;
+  AskedKeys* asked_;
 };
 
 void Require(bool ok, const Field& f, const std::string& key, const std::string& what) {
@@ -441,10 +474,12 @@ Scene ParseScene(const nlohmann::json& json, const std::string& source_name) {
   if (!json.is_object()) {
     throw std::invalid_argument(source_name + ": top level must be a JSON object");
   }
-  const Field f(json, source_name, "");
+  AskedKeys asked;
+  const Field f(json, source_name, "", &asked);
   Scene scene;
   scene.json = json;
   scene.name = f.String("name");
+  f.String("description", "");  // for the reader of the file
   scene.ground_pixel_size = f.Number("ground_pixel_size");
   Require(scene.ground_pixel_size > 0, f, "ground_pixel_size", "must be > 0");
   const Field roi = f.Child("region_of_interest");
@@ -470,6 +505,7 @@ Scene ParseScene(const nlohmann::json& json, const std::string& source_name) {
   if (f.Has("sun")) ParseSun(f.Child("sun"), &scene.sun);
   scene.layout = ParseLayout(f.Child("cameras"));
   ParseRendering(f, &scene);
+  asked.RefuseOthers(source_name);
   scene.source_path = source_name;
   scene.Check();
   return scene;

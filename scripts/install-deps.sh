@@ -19,6 +19,7 @@ PACKAGES=(
   libcli11-dev                             # command line of the facets binary
   view3dscene                              # tovrmlx3d: reads the .wrl products (validate-products.sh)
   libgdal-dev                              # GeoTIFF orthophoto and DSM (io/raster_io)
+  libtiff-dev                              # damaged deflate TIFF strips (io/tiff_strips)
   universal-ctags                          # function extents for scripts/check_lengths.sh
   clang libclang-rt-14-dev                 # libFuzzer and its sanitizers (scripts/fuzz.sh)
 )

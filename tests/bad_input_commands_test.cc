@@ -1,9 +1,16 @@
 // Bad input to the mesh readers (PLY, OBJ) and to the subcommands other than
 // reconstruct: creases, export, evaluate, render. tests/bad_input.h says what every
 // case asserts; tests/bad_input_readers_test.cc has reconstruct's readers.
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cstdint>
+#include <map>
 #include <string>
 
+#include "io/folder_snapshot_for_testing.h"
 #include "io/ply_io.h"
 #include "tests/bad_input.h"
 
@@ -135,6 +142,93 @@ TEST_F(BadMesh, Render) {
   fs::remove(scene);
   fs::create_directories(scene);
   ExpectRefused(args, {"scene.json", "is a folder"}, out);
+}
+
+// The bundled stereo pair's scene (two small cropped frames: renders in about a second).
+std::string PairScene() { return FileText(fs::path(FACETS_SOURCE_DIR) / "scenes/data/seed_gable_parallel.json"); }
+
+std::string Replaced(std::string text, const std::string& from, const std::string& to) {
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return at == std::string::npos ? text : text.replace(at, from.size(), to);
+}
+
+// A misspelt key of the scene file is an error naming it and the nearest known key, at
+// the top level and inside an object.
+TEST_F(BadMesh, RenderUnknownSceneKeys) {
+  const fs::path scene = dir_ / "scene.json", out = dir_ / "rendered";
+  const std::string args = "render " + scene.string() + " --out " + out.string();
+  WriteText(scene, Replaced(PairScene(), "\"noise_sigma\"", "\"noise_sgima\""));
+  ExpectRefused(args, {"scene.json: top level: unknown key 'noise_sgima' (nearest known key: 'noise_sigma')"}, out);
+  WriteText(scene, Replaced(PairScene(), "\"focal_mm\"", "\"focal_mn\""));
+  ExpectRefused(args, {"scene.json: /cameras: unknown key 'focal_mn' (nearest known key: 'focal_mm')"}, out);
+  WriteText(scene, Replaced(PairScene(), "\"slope_deg\"", "\"file\": \"x.ply\", \"slope_deg\""));
+  ExpectRefused(args, {"scene.json: /surface/1: unknown key 'file'"}, out);
+}
+
+// The render's output folder is replaced as a whole: a render that fails after it has
+// started leaves the previous output byte for byte and no temporary folder beside it; a
+// folder of other files is not replaced.
+TEST_F(BadMesh, RenderOutputFolderIsAUnit) {
+  const fs::path scene = dir_ / "scene.json", out = dir_ / "rendered";
+  const std::string args = "render " + scene.string() + " --out " + out.string() + " --supersampling 1";
+  WriteText(scene, PairScene());
+  ASSERT_EQ(RunFacets(args).status, 0);
+  const auto before = FolderSnapshot(out);
+  ASSERT_TRUE(before.count("project.json") && before.count("images/img_00.png"));
+  WriteText(dir_ / "broken.ply", "ply\nformat ascii 1.0\nelement vertex 3\nend_header\n");
+  WriteText(scene, Replaced(PairScene(), "\"type\": \"gable_roof\",", "\"type\": \"mesh\", \"file\": \"broken.ply\","));
+  const Outcome failed = RunFacets(args);
+  std::cout << "  -> status " << failed.status << ": " << failed.err;
+  EXPECT_EQ(failed.status, 1);
+  EXPECT_NE(failed.err.find("broken.ply"), std::string::npos) << failed.err;
+  EXPECT_NE(failed.err.find(out.string() + " is unchanged"), std::string::npos) << failed.err;
+  EXPECT_TRUE(FolderSnapshot(out) == before);
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    EXPECT_EQ(entry.path().filename().string().find("rendered.facets-tmp"), std::string::npos) << entry.path();
+  }
+  const fs::path mine = dir_ / "mine";
+  WriteText(mine / "notes.txt", "mine");
+  WriteText(scene, PairScene());
+  const Outcome refused = RunFacets("render " + scene.string() + " --out " + mine.string());
+  EXPECT_EQ(refused.status, 1);
+  EXPECT_NE(refused.err.find(mine.string() + ": holds files but no earlier run's output"), std::string::npos)
+      << refused.err;
+  EXPECT_EQ(FileText(mine / "notes.txt"), "mine");
+}
+
+// SIGINT or SIGTERM at the first moment the program can act on one (sent right after the
+// start with the signal blocked, so it waits through the loading of the program): the
+// clean message and status of a stopped run, not a death by signal, and nothing written.
+TEST(BadSignal, StopDuringStartUpSaysSoWithTheStatusOfAStop) {
+  const fs::path dir = CaseFolder();
+  const fs::path out = dir / "run", err = dir / "err.txt";
+  for (const int signal_number : {SIGINT, SIGTERM}) {
+    // Blocked before the fork: the child holds it blocked from its first instruction.
+    sigset_t blocked, previous;
+    sigemptyset(&blocked);
+    sigaddset(&blocked, signal_number);
+    ASSERT_EQ(sigprocmask(SIG_BLOCK, &blocked, &previous), 0);
+    const pid_t pid = fork();
+    if (pid != 0) sigprocmask(SIG_SETMASK, &previous, nullptr);
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      const int fd = open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      dup2(fd, STDERR_FILENO);
+      const std::string project = (dir / "project.json").string(), out_arg = out.string();
+      execl(FACETS_CLI, FACETS_CLI, "reconstruct", "--project", project.c_str(), "--out", out_arg.c_str(),
+            static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    ASSERT_EQ(kill(pid, signal_number), 0);
+    int status = 0;
+    ASSERT_EQ(waitpid(pid, &status, 0), pid);
+    const std::string name = signal_number == SIGINT ? "SIGINT" : "SIGTERM";
+    ASSERT_TRUE(WIFEXITED(status)) << name << ": ended by signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+    EXPECT_EQ(WEXITSTATUS(status), 128 + signal_number) << name;
+    EXPECT_EQ(FileText(err), "facets: error: stopped by " + name + "\n");
+    EXPECT_TRUE(FilesBelow(out).empty());
+  }
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "engine/pipeline/start_stage.h"
+#include "io/image_io.h"
 
 namespace facets {
 namespace {
@@ -441,11 +442,14 @@ ImageBlock KeepUsableImages(const ImageBlock& block, const GeometryCheck& check)
   return kept;
 }
 
-ImageBlock CheckedBlock(const ImageBlock& block, const std::optional<RegionOfInterest>& given,
-                        const std::function<void(const std::string&)>& say, GeometryCheck* check) {
-  *check = CheckBlockGeometry(block, ChooseRegion(block, given));
-  for (const std::string& line : check->Lines()) say(line);
-  return KeepUsableImages(block, *check);
+CheckedImageBlock CheckBlock(const ImageBlock& block, const std::optional<RegionOfInterest>& given,
+                             const std::function<void(const std::string&)>& say) {
+  CheckImageHeaders(block);
+  CheckedImageBlock checked;
+  checked.geometry = CheckBlockGeometry(block, ChooseRegion(block, given));
+  for (const std::string& line : checked.geometry.Lines()) say(line);
+  checked.block = KeepUsableImages(block, checked.geometry);
+  return checked;
 }
 
 }  // namespace facets

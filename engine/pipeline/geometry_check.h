@@ -100,10 +100,18 @@ GeometryCheck CheckBlockGeometry(const ImageBlock& block, const RegionOfInterest
 // why it is unusable when fewer than 2 usable images remain.
 ImageBlock KeepUsableImages(const ImageBlock& block, const GeometryCheck& check);
 
-// What `facets reconstruct` runs on the block it read: the region (ChooseRegion with
-// `given`), CheckBlockGeometry, its lines said, KeepUsableImages. *check receives the
-// check's result.
-ImageBlock CheckedBlock(const ImageBlock& block, const std::optional<RegionOfInterest>& given,
-                        const std::function<void(const std::string&)>& say, GeometryCheck* check);
+// A block as a reconstruction works on it: the images the checks found unusable removed,
+// and the geometry check's result.
+struct CheckedImageBlock {
+  ImageBlock block;
+  GeometryCheck geometry;
+};
+
+// What every reconstruction runs on the block it is given before any pixel is read:
+// the image files' headers first (CheckImageHeaders: each file readable, its size its
+// camera's), so that a file problem is reported as such; then the region (ChooseRegion
+// with `given`), CheckBlockGeometry, its lines said, KeepUsableImages.
+CheckedImageBlock CheckBlock(const ImageBlock& block, const std::optional<RegionOfInterest>& given,
+                             const std::function<void(const std::string&)>& say);
 
 }  // namespace facets

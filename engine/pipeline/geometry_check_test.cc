@@ -5,16 +5,21 @@
 #include "engine/pipeline/geometry_check.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <functional>
 #include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "engine/pipeline/reconstruction.h"
+#include "engine/pipeline/start_stage.h"
+#include "io/image_io.h"
 #include "io/colmap_io.h"
 #include "io/shared_data_for_testing.h"
 #include "scenes/camera_layout.h"
@@ -242,6 +247,47 @@ TEST(GeometryCheck, SharedCameraCorruptedStopsNamingIt) {
       << what;
 }
 
+// Reconstruct() called as a library runs the checks itself, the image files first: the
+// pair with one image turned stops with the geometry check's reasons before any pixel
+// is read (the images are blank); a missing file, or one of the wrong size, is named
+// before the geometry is looked at.
+TEST(GeometryCheck, ReconstructRunsTheChecksImageFilesFirst) {
+  ImageBlock pair = Pair();
+  const std::filesystem::path dir =
+      std::filesystem::path(testing::TempDir()) / ("facets_geometry_check_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  for (BlockImage& image : pair.images) {
+    const Camera& camera = pair.CameraOf(image);
+    ImagePlanes blank;
+    blank.width = camera.width;
+    blank.height = camera.height;
+    blank.channels = 1;
+    blank.data.assign(static_cast<size_t>(camera.width) * camera.height, 0.0f);
+    image.path = (dir / image.name).string();
+    WriteImage(image.path, blank);
+  }
+  Rotate180(&pair.images[1], Eigen::Vector3d::UnitZ());
+  ReconstructionOptions options;
+  std::vector<std::string> said;
+  options.progress = [&said](const std::string& line) { said.push_back(line); };
+  const std::string geometry = ErrorOf([&] { Reconstruct(pair, options); });
+  EXPECT_EQ(geometry.rfind("geometry check: 0 of 2 images usable, a surface needs at least 2", 0), 0u) << geometry;
+  ASSERT_FALSE(said.empty());
+  EXPECT_EQ(said.front().rfind("geometry check: 0 of 2 images usable", 0), 0u) << said.front();
+
+  const std::string first = pair.images[0].path;
+  std::filesystem::remove(first);
+  const std::string missing = ErrorOf([&] { Reconstruct(pair, options); });
+  EXPECT_EQ(missing.rfind(first + ": image file not found", 0), 0u) << missing;
+  ImagePlanes small;
+  small.width = small.height = small.channels = 1;
+  small.data = {0.0f};
+  WriteImage(first, small);
+  const std::string size = ErrorOf([&] { Reconstruct(pair, options); });
+  EXPECT_NE(size.find(first + ": image is 1x1 pixels but camera"), std::string::npos) << size;
+  std::filesystem::remove_all(dir);
+}
+
 // The real sets (kite aerials, a facade from the street, an object all around) keep every
 // image with their tie points' region.
 TEST(GeometryCheck, RealSetsPassWhole) {
@@ -249,8 +295,8 @@ TEST(GeometryCheck, RealSetsPassWhole) {
                           "middlebury_templeSparseRing/sparse_with_points"}) {
     FACETS_SKIP_WITHOUT_SHARED_DATA(set);
     const ImageBlock block = ReadColmapModel(SharedDataDir() + set);
-    GeometryCheck check;
-    const ImageBlock kept = CheckedBlock(block, std::nullopt, [](const std::string&) {}, &check);
+    const GeometryCheck check = CheckBlockGeometry(block, ChooseRegion(block, std::nullopt));
+    const ImageBlock kept = KeepUsableImages(block, check);
     std::printf("%s: %s\n", set, AllLines(check).c_str());
     EXPECT_EQ(kept.images.size(), block.images.size()) << AllLines(check);
     EXPECT_EQ(check.Lines().size(), 1u) << AllLines(check);

@@ -200,12 +200,22 @@ AdjustmentOptions RunContext::LevelOptions(int level, int cycle) const {
 
 Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions& options) {
   options.Check();
+  return Reconstruct(CheckBlock(block, options.roi, [&options](const std::string& line) {
+                       if (options.progress) options.progress(line);
+                     }),
+                     options);
+}
+
+Reconstruction Reconstruct(const CheckedImageBlock& checked, const ReconstructionOptions& options) {
+  options.Check();
   const auto start = std::chrono::steady_clock::now();
+  const ImageBlock& block = checked.block;
   if (block.images.size() < 2) throw std::runtime_error("reconstruction needs at least 2 images");
   auto say = [&options](const std::string& line) {
     if (options.progress) options.progress(line);
   };
   Reconstruction result;
+  result.report.geometry = checked.geometry;
   RunProfile& profile = result.report.profile;
   const ClockReading run_start = ReadClocks();
   StartPlan plan = PlanStart(block, options);

@@ -254,7 +254,7 @@ struct LevelReport {
 };
 
 struct ReconstructionReport {
-  // The block's geometry check (CheckedBlock) when its caller ran it: images empty otherwise.
+  // The block's geometry check (CheckBlock).
   GeometryCheck geometry;
   std::vector<LiftingTrial> lifting;
   double start_height = 0.0;
@@ -289,8 +289,15 @@ struct Reconstruction {
   std::vector<uint8_t> vertex_flags;
 };
 
-// Throws std::runtime_error with a clear message on unusable input (no ROI and no tie
-// points, images that do not see the region, unreadable images).
+// Runs CheckBlock (engine/pipeline/geometry_check.h: image headers, geometry; region
+// options.roi, its lines to options.progress) on `block`, then reconstructs from the
+// images it keeps. Throws std::runtime_error with a clear message on unusable input (an
+// image file missing, unreadable or of the wrong size, fewer than 2 usable images, no
+// ROI and no tie points, images whose pixels cannot be decoded).
 Reconstruction Reconstruct(const ImageBlock& block, const ReconstructionOptions& options);
+// The same from a block CheckBlock has checked (by a caller that needs the checked block
+// before it chooses the options, as `facets reconstruct` does); the products take
+// checked.block's origin.
+Reconstruction Reconstruct(const CheckedImageBlock& checked, const ReconstructionOptions& options);
 
 }  // namespace facets
