@@ -2,27 +2,21 @@
 # Fuzzes the readers of user files (fuzz/: COLMAP text model, project JSON, PLY, the
 # --config file) with libFuzzer, AddressSanitizer and UndefinedBehaviorSanitizer:
 #   scripts/fuzz.sh [SECONDS_PER_TARGET [TARGET...]]   (default 60 s, every target)
-# Builds in ./build-fuzz with clang (ccache when present), then runs each target for
-# SECONDS from its seed corpus fuzz/corpus/<target> (new inputs go to
-# build-fuzz/corpus/<target>, the seeds stay as they are). An input of at most 64 KiB
-# that makes the reader allocate more than 1 GB (-malloc_limit_mb, -rss_limit_mb), run
-# longer than 10 s, leak, or trip a sanitizer is a finding: its input is written to
-# build-fuzz/artifacts/<target>/ and the script exits 1 after the table:
+# Builds in ./build-sanitized (scripts/sanitized-build.sh: clang, -O1, the objects the
+# sanitized unit tests use too), then runs each target for SECONDS from its seed corpus
+# fuzz/corpus/<target> (new inputs go to build-sanitized/corpus/<target>, the seeds stay
+# as they are). An input of at most 64 KiB that makes the reader allocate more than 1 GB
+# (-malloc_limit_mb, -rss_limit_mb), run longer than 10 s, leak, or trip a sanitizer is a
+# finding: its input is written to build-sanitized/artifacts/<target>/ and the script
+# exits 1 after the table:
 #   target        runs   exec/s  cov   features  crashes
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-60}
 targets=(fuzz_colmap fuzz_project fuzz_ply fuzz_config)
 if [ $# -gt 1 ]; then targets=("${@:2}"); fi
-build=build-fuzz
-if [ ! -f "$build/build.ninja" ]; then
-  launcher=()
-  if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
-  cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
-    -DFACETS_FUZZ=ON -DFACETS_BUILD_TESTS=OFF "${launcher[@]}" >/dev/null
-fi
-# One build at a time on a shared machine (flock), the same lock as the other builds.
-flock /tmp/facets-build.lock cmake --build "$build" -j"$(nproc 2>/dev/null || echo 2)" --target "${targets[@]}"
+build=build-sanitized
+bash scripts/sanitized-build.sh "${targets[@]}"
 
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}

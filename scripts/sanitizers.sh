@@ -3,23 +3,15 @@
 # UndefinedBehaviorSanitizer: any report fails its test.
 #   scripts/sanitizers.sh [TEST_TARGET...]
 # Builds the given unit-test executables (default facets_unit_tests: all of them, e.g.
-# facets_io_tests facets_mesh_tests for a subset) in ./build-asan with the system
-# compiler at -O1 (ccache when present), runs the unit tests of every executable built
-# there and prints "sanitizers: N tests, build S s, tests S s" at the end.
+# facets_io_tests facets_mesh_tests for a subset) in ./build-sanitized
+# (scripts/sanitized-build.sh: clang, -O1, the objects scripts/fuzz.sh links too), runs
+# the unit tests of every executable built there and prints
+# "sanitizers: N tests, build S s, tests S s" at the end.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-build=build-asan
+build=build-sanitized
 start=$(date +%s)
-if [ ! -f "$build/build.ninja" ]; then
-  launcher=()
-  if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
-  flags="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
-  cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-    -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g -DNDEBUG" \
-    -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" "${launcher[@]}" >/dev/null
-fi
-targets=("${@:-facets_unit_tests}")
-flock /tmp/facets-build.lock cmake --build "$build" -j"$(nproc 2>/dev/null || echo 2)" --target "${targets[@]}"
+bash scripts/sanitized-build.sh "${@:-facets_unit_tests}"
 built=$(date +%s)
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:detect_stack_use_after_return=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
