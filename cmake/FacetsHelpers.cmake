@@ -8,7 +8,8 @@
 #   entry labelled `unit` or `e2e` (`ctest -L unit` runs the fast ones first).
 #   LABEL: e2e for the tests defined in tests/, unit for the module tests beside their
 #   sources unless given (a module test that renders a scene and reconstructs is e2e).
-#   TIMEOUT: seconds per test case, 120 for unit and 900 for e2e unless given.
+#   TIMEOUT: seconds per test case, 120 for unit and 900 for e2e unless given; five times
+#   that in the sanitized build (FACETS_FUZZ).
 #   The target facets_unit_tests builds every `unit` executable (and nothing else):
 #   scripts/sanitizers.sh builds it with ASan and UBSan and runs `ctest -L unit`.
 #   FACETS_SHARED_DATA_DIR: the real data sets beside the repository (../shared/data),
@@ -44,6 +45,10 @@ function(facets_add_test name)
     else()
       set(ARG_TIMEOUT 900)
     endif()
+  endif()
+  if(FACETS_FUZZ)
+    # Sanitized objects run 3-30x slower (CastPixels' brute-force check: 2.3 -> 75 CPU s).
+    math(EXPR ARG_TIMEOUT "${ARG_TIMEOUT} * 5")
   endif()
   add_executable(${name} ${ARG_SRCS})
   if(ARG_LABEL STREQUAL "unit")
