@@ -15,6 +15,7 @@ bash scripts/sanitized-build.sh "${@:-facets_unit_tests}"
 built=$(date +%s)
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:detect_stack_use_after_return=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/scripts/lsan.supp:print_suppressions=0}
 cd "$build"
 set +e
 # Executables not built (a subset) stand in ctest as *_NOT_BUILT placeholders.
