@@ -9,7 +9,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "engine/pipeline/start_stage.h"
+#include "engine/pipeline/region_choice.h"
+#include "io/image_frame.h"
 #include "io/image_io.h"
 
 namespace facets {
@@ -120,41 +121,6 @@ std::string PoseProblem(const BlockImage& image) {
   return "";
 }
 
-// The image frame as undistorted normalised coordinates (x/z, y/z): the box of its
-// border's rays, widened by 1 %. Points outside it are not projected through the lens
-// model, whose polynomial may fold them back into the frame.
-struct Frame {
-  Eigen::Vector2d min, max;
-};
-
-Frame FrameOf(const Camera& camera) {
-  Frame frame{Eigen::Vector2d::Constant(1e300), Eigen::Vector2d::Constant(-1e300)};
-  for (int k = 0; k <= 8; ++k) {
-    const double a = k / 8.0;
-    for (const Eigen::Vector2d& pixel :
-         {Eigen::Vector2d(a * camera.width, 0), Eigen::Vector2d(a * camera.width, camera.height),
-          Eigen::Vector2d(0, a * camera.height), Eigen::Vector2d(camera.width, a * camera.height)}) {
-      const Eigen::Vector2d ray = camera.CamFromImage(pixel).head<2>();
-      frame.min = frame.min.cwiseMin(ray);
-      frame.max = frame.max.cwiseMax(ray);
-    }
-  }
-  const Eigen::Vector2d margin = 0.01 * (frame.max - frame.min);
-  frame.min -= margin;
-  frame.max += margin;
-  return frame;
-}
-
-// Whether the point lies in front of the image and projects into its frame.
-bool ProjectsInto(const Camera& camera, const Frame& frame, const BlockImage& image, const Eigen::Vector3d& point) {
-  const Eigen::Vector3d in_cam = image.cam_from_world * point;
-  if (!(in_cam.z() > 0)) return false;
-  const Eigen::Vector2d ray = in_cam.head<2>() / in_cam.z();
-  if ((ray.array() < frame.min.array()).any() || (ray.array() > frame.max.array()).any()) return false;
-  const Eigen::Vector2d pixel = camera.ImageFromCam(in_cam);
-  return pixel.x() >= 0 && pixel.y() >= 0 && pixel.x() <= camera.width && pixel.y() <= camera.height;
-}
-
 std::vector<Eigen::Vector3d> RegionPoints(const ImageBlock& block, const RegionOfInterest& region) {
   std::vector<Eigen::Vector3d> points;
   const Eigen::Vector3d extent = region.max - region.min;
@@ -244,8 +210,7 @@ struct RegionView {
 
 RegionView ViewOfRegion(const ImageBlock& block, const BlockImage& image, const std::vector<Eigen::Vector3d>& points,
                         int* in_front) {
-  const Camera& camera = block.CameraOf(image);
-  const Frame frame = FrameOf(camera);
+  const ImageFrame frame(block.CameraOf(image));
   const Eigen::Vector3d centre = image.ProjectionCentre();
   RegionView view;
   view.sees.assign(points.size(), 0);
@@ -253,7 +218,7 @@ RegionView ViewOfRegion(const ImageBlock& block, const BlockImage& image, const 
   *in_front = 0;
   for (size_t s = 0; s < points.size(); ++s) {
     if ((image.cam_from_world * points[s]).z() > 0) ++*in_front;
-    if (!ProjectsInto(camera, frame, image, points[s])) continue;
+    if (!frame.Contains(image, points[s])) continue;
     view.sees[s] = 1;
     view.rays[s] = (points[s] - centre).normalized();
   }

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "engine/images/level_image_store.h"
+#include "engine/pipeline/region_choice.h"
 #include "engine/pipeline/start_stage.h"
 #include "io/image_cache.h"
 #include "mesh/tessellation.h"

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "engine/solver/window_adjustment.h"
@@ -15,36 +16,6 @@ double Median(std::vector<double> v) {
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
   return v[v.size() / 2];
 }
-
-double Percentile(std::vector<double> v, double q) {
-  std::sort(v.begin(), v.end());
-  return v[static_cast<size_t>(std::clamp(q, 0.0, 1.0) * (v.size() - 1))];
-}
-
-}  // namespace
-
-RegionOfInterest ChooseRegion(const ImageBlock& block, const std::optional<RegionOfInterest>& given) {
-  if (given) return *given;
-  if (block.roi) return *block.roi;
-  if (block.points.size() >= 10) {
-    // The bulk of the tie points: 2nd to 98th percentile, robust to a few blunders.
-    std::vector<double> x, y, z;
-    for (const auto& p : block.points) {
-      x.push_back(p.xyz.x());
-      y.push_back(p.xyz.y());
-      z.push_back(p.xyz.z());
-    }
-    RegionOfInterest roi;
-    roi.min = Eigen::Vector3d(Percentile(x, 0.02), Percentile(y, 0.02), Percentile(z, 0.02));
-    roi.max = Eigen::Vector3d(Percentile(x, 0.98), Percentile(y, 0.98), Percentile(z, 0.98));
-    return roi;
-  }
-  throw std::runtime_error(
-      "no region of interest: the block has none, none was given, and there are fewer "
-      "than 10 tie points to derive one from");
-}
-
-namespace {
 
 double ChooseStartHeight(const ImageBlock& block, const RegionOfInterest& roi, const ReconstructionOptions& options) {
   if (options.start_height) return *options.start_height;
@@ -184,7 +155,9 @@ StartPlan PlanStart(const ImageBlock& block, const ReconstructionOptions& option
     if (options.progress) options.progress(line);
   };
   StartPlan plan;
-  plan.roi = ChooseRegion(block, options.roi);
+  std::string region_source;
+  plan.roi = ChooseRegion(block, options.roi, &region_source);
+  say("region: " + DescribeRegion(plan.roi) + " (" + region_source + ")");
   plan.camera_up = CameraUp(block);
   // A closed start (objects) replaces the plane; its centre sets the ground pixel.
   if (options.start_closed || !options.closed.mesh_file.empty()) {

@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "engine/pipeline/reconstruction.h"
+#include "engine/pipeline/region_choice.h"
 #include "engine/pipeline/run_context.h"
 #include "engine/start/start_closed.h"
 #include "engine/start/start_fitted_plane.h"
@@ -24,9 +25,6 @@ struct StartPlan {
   Eigen::Vector3d camera_up = Eigen::Vector3d::UnitZ();
 };
 
-// The region of interest: the given one, else the block's, else the bulk of the tie
-// points (2nd to 98th percentile per axis). Throws std::runtime_error when there is none.
-RegionOfInterest ChooseRegion(const ImageBlock& block, const std::optional<RegionOfInterest>& given);
 // Median ground pixel of the original images at `centre` (m).
 double GroundPixel(const ImageBlock& block, const Eigen::Vector3d& centre);
 
