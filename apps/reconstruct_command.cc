@@ -21,6 +21,7 @@
 #include "apps/option_binder.h"
 #include "apps/memory_preflight.h"
 #include "apps/reconstruct_options.h"
+#include "engine/pipeline/background_choice.h"
 #include "engine/pipeline/memory_estimate.h"
 #include "engine/pipeline/geometry_check.h"
 #include "engine/pipeline/products.h"
@@ -120,13 +121,24 @@ void ChooseOptions(const ImageBlock& block, ReconstructCommandLine* line, const 
   line->app.scene = preset;
   ApplySceneAndGivenOptions(preset, line);  // the options the memory check sees, before any pixel is read
   CheckRunMemory(block, *line, say);
-  std::function<void(ReconstructionOptions*)> from_data;
+  std::vector<std::function<void(ReconstructionOptions*)>> from_data;
   if (!OptionGiven(*line, "--radiometry")) {
     const RadiometryChoice radiometry = ChooseRadiometry(block);
     say("radiometry: " + radiometry.why);
-    from_data = [model = radiometry.model](ReconstructionOptions* options) { options->adjustment.radiometry = model; };
+    from_data.push_back([model = radiometry.model](ReconstructionOptions* options) { options->adjustment.radiometry = model; });
   }
-  const SceneApplication applied = ApplySceneAndGivenOptions(preset, line, from_data);
+  // An object's hull and outline need the background's grey level; other scenes use neither.
+  if (line->options.start_closed && !OptionGiven(*line, "--hull-background")) {
+    const BackgroundChoice background = ChooseBackground(block);
+    say("background: " + background.why);
+    from_data.push_back([background](ReconstructionOptions* options) {
+      options->closed.visual_hull.foreground.background_max = background.hull_background;
+      options->silhouette_foreground.background_max = background.silhouette_background;
+    });
+  }
+  const SceneApplication applied = ApplySceneAndGivenOptions(preset, line, [&from_data](ReconstructionOptions* options) {
+    for (const auto& set : from_data) set(options);
+  });
   say("  the preset and the images set: " + (applied.preset.empty() ? std::string("nothing") : applied.preset));
   say("  options given: " + (applied.given.empty() ? std::string("none") : applied.given));
 }
