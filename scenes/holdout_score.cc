@@ -73,7 +73,12 @@ double MedianOver(const std::vector<HoldoutImageScore>& images, double (*value)(
   for (const HoldoutImageScore& image : images) {
     if (std::isfinite(value(image))) values.push_back(value(image));
   }
-  return Quantile(values, 0.5);
+  // The middle of an even count is the mean of its two middle values: with two held-out
+  // images each column is their mean, not the lower one (which mixes images across columns).
+  if (values.empty()) return kNoValue;
+  std::sort(values.begin(), values.end());
+  const size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
 }  // namespace

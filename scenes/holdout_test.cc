@@ -94,5 +94,31 @@ TEST(HoldoutScoreTest, QuantileTakesTheLowerNeighbour) {
   EXPECT_TRUE(std::isnan(Quantile({}, 0.5)));
 }
 
+
+// With an even number of held-out images each summary column is the mean of its two
+// middle values, so no column takes one image's value and another column the other's.
+TEST(HoldoutScoreTest, SummaryOfTwoImagesIsTheirMean) {
+  HoldoutReport report;
+  report.images.resize(2);
+  report.images[0].zncc_median = 0.946;
+  report.images[0].fit.rms = 5.80;
+  report.images[0].pixels = 100;
+  report.images[0].covered = 90;
+  report.images[1].zncc_median = 0.932;
+  report.images[1].fit.rms = 7.64;
+  report.images[1].pixels = 100;
+  report.images[1].covered = 70;
+  report.images[1].zncc_p10 = 0.6;
+  SummariseHoldout(&report);
+  EXPECT_DOUBLE_EQ(report.zncc_median, 0.5 * (0.946 + 0.932));
+  EXPECT_DOUBLE_EQ(report.rms, 0.5 * (5.80 + 7.64));
+  EXPECT_DOUBLE_EQ(report.frame_coverage, 0.8);
+  EXPECT_DOUBLE_EQ(report.zncc_p10, 0.6);  // the one image that has a value
+  report.images.push_back(report.images[0]);
+  report.images[2].zncc_median = 0.1;
+  SummariseHoldout(&report);
+  EXPECT_DOUBLE_EQ(report.zncc_median, 0.932);  // odd count: the middle one
+}
+
 }  // namespace
 }  // namespace facets
