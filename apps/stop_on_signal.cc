@@ -71,8 +71,24 @@ StopOnSignal::StopOnSignal(std::function<void(const std::string&)> on_stop) : on
 }
 
 StopOnSignal::~StopOnSignal() {
-  ::sigaction(SIGINT, &g_previous_int, nullptr);
-  ::sigaction(SIGTERM, &g_previous_term, nullptr);
+  // After Finish the command's output is final (committed, or reported as unchanged): a
+  // signal from here until the process ends must not say "stopped" (and end with 130) over
+  // a finished run, so the two signals are ignored; before it, the previous handlers return.
+  bool finished = false;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    finished = finished_;
+  }
+  if (finished) {
+    struct sigaction ignore {};
+    ignore.sa_handler = SIG_IGN;
+    sigemptyset(&ignore.sa_mask);
+    ::sigaction(SIGINT, &ignore, nullptr);
+    ::sigaction(SIGTERM, &ignore, nullptr);
+  } else {
+    ::sigaction(SIGINT, &g_previous_int, nullptr);
+    ::sigaction(SIGTERM, &g_previous_term, nullptr);
+  }
   const unsigned char stop = 0;
   [[maybe_unused]] const ssize_t ignored = ::write(pipe_[1], &stop, 1);
   watcher_.join();

@@ -18,14 +18,15 @@ namespace facets {
 class StopOnSignal {
  public:
   // on_stop gets the signal's name ("SIGINT", "SIGTERM"). Installs the handlers (the
-  // previous ones come back in the destructor).
+  // previous ones come back in the destructor unless Finish ran).
   explicit StopOnSignal(std::function<void(const std::string&)> on_stop);
   ~StopOnSignal();
   StopOnSignal(const StopOnSignal&) = delete;
   StopOnSignal& operator=(const StopOnSignal&) = delete;
 
   // Runs `finish` (commit the output, or report a failure) so that no stop interleaves
-  // with it; signals after it are ignored.
+  // with it; signals after it are ignored, also after the destructor (the process is
+  // about to end with the command's own status).
   void Finish(const std::function<void()>& finish);
 
  private:
