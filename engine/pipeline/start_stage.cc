@@ -108,6 +108,23 @@ TinMesh OpenStart(const RunContext& run, const StartPlan& plan, ReconstructionRe
   return mesh;
 }
 
+// The coarsest level's start on a fitted (e.g. facade) plane: the tie points' relief
+// along its normal, or the bare plane when too few points lie over it.
+TinMesh FittedStart(const RunContext& run, const StartPlan& plan, ReconstructionReport* report) {
+  const ReconstructionOptions& options = run.options;
+  const double spacing = run.EdgeLength(run.coarsest);
+  const std::vector<Eigen::Vector3d> points = TiePointsInRegion(run.block, plan.roi);
+  if (!UseTiePointStart(options.start, static_cast<int>(points.size()), false, options.tiepoint_start)) {
+    report->start_surface = "fitted plane";
+    return MakeFittedPlaneMesh(*plan.fitted, spacing);
+  }
+  TiePointStartReport fit;
+  TinMesh mesh = MakeFittedTiePointMesh(*plan.fitted, points, spacing, options.tiepoint_start, &fit);
+  report->start_surface = "tiepoints over the fitted plane";
+  report->start_detail = fit.Brief() + " (x, y in the plane, z along its normal)";
+  return mesh;
+}
+
 // One iteration of the coarsest level from a plane at this height (object lifting).
 LiftingTrial TryLiftingHeight(const RunContext& run, const StartPlan& plan, double height) {
   TinMesh mesh = StartPlane(plan.roi, height, run.EdgeLength(run.coarsest));
@@ -195,8 +212,7 @@ TinMesh MakeStartSurface(const RunContext& run, StartPlan* plan, ReconstructionR
                                [&run](const std::string& line) { run.Say(line); });
     report->start_surface = "closed";
   } else if (plan->fitted) {
-    mesh = MakeFittedPlaneMesh(*plan->fitted, run.EdgeLength(run.coarsest));
-    report->start_surface = "fitted plane";
+    mesh = FittedStart(run, *plan, report);
   } else {
     mesh = OpenStart(run, *plan, report);
   }

@@ -83,6 +83,20 @@ FittedPlane FitStartPlane(const std::vector<Eigen::Vector3d>& points, const Eige
   return plane;
 }
 
+namespace {
+
+// Grid (u, v, w) -> centre + u axis_u + v axis_v + w normal; a proper rotation (axis_u x
+// axis_v = normal), so the faces, counter-clockwise seen from +w, face along the normal.
+void PlaneFrameToWorld(const FittedPlane& plane, TinMesh* mesh) {
+  for (auto vh : mesh->vertices()) {
+    const Eigen::Vector3d g = ToEigen(mesh->point(vh));
+    mesh->set_point(vh, ToOpenMesh(plane.centre + g.x() * plane.axis_u + g.y() * plane.axis_v + g.z() * plane.normal));
+  }
+  UpdateVertexNormals(mesh);
+}
+
+}  // namespace
+
 TinMesh MakeFittedPlaneMesh(const FittedPlane& plane, double spacing) {
   StartGridOptions grid;
   grid.min = plane.min_uv;
@@ -90,13 +104,24 @@ TinMesh MakeFittedPlaneMesh(const FittedPlane& plane, double spacing) {
   grid.spacing = spacing;
   grid.plane_height = 0.0;
   TinMesh mesh = MakeStartGrid(grid);
-  // Grid (u, v, 0) -> centre + u axis_u + v axis_v; a proper rotation (axis_u x axis_v =
-  // normal), so the faces, counter-clockwise seen from +w, face along the normal.
-  for (auto vh : mesh.vertices()) {
-    const Eigen::Vector3d g = ToEigen(mesh.point(vh));
-    mesh.set_point(vh, ToOpenMesh(plane.centre + g.x() * plane.axis_u + g.y() * plane.axis_v));
+  PlaneFrameToWorld(plane, &mesh);
+  return mesh;
+}
+
+TinMesh MakeFittedTiePointMesh(const FittedPlane& plane, const std::vector<Eigen::Vector3d>& points,
+                               double spacing, const TiePointStartOptions& options, TiePointStartReport* report) {
+  std::vector<Eigen::Vector3d> in_frame;
+  in_frame.reserve(points.size());
+  for (const auto& p : points) {
+    const Eigen::Vector3d d = p - plane.centre;
+    in_frame.emplace_back(plane.axis_u.dot(d), plane.axis_v.dot(d), plane.normal.dot(d));
   }
-  UpdateVertexNormals(&mesh);
+  constexpr double kAnyDistance = 1e30;  // the points were chosen by the region already
+  RegionOfInterest extent;
+  extent.min = Eigen::Vector3d(plane.min_uv.x(), plane.min_uv.y(), -kAnyDistance);
+  extent.max = Eigen::Vector3d(plane.max_uv.x(), plane.max_uv.y(), kAnyDistance);
+  TinMesh mesh = StartFromTiePoints(in_frame, extent, spacing, options, report);
+  PlaneFrameToWorld(plane, &mesh);
   return mesh;
 }
 

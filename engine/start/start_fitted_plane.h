@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "engine/start/start_tiepoints.h"
 #include "mesh/tin.h"
 
 namespace facets {
@@ -47,5 +48,14 @@ FittedPlane FitStartPlane(const std::vector<Eigen::Vector3d>& points, const Eige
 
 // The regular start grid (MakeStartGrid, spacing in metres) laid into the plane.
 TinMesh MakeFittedPlaneMesh(const FittedPlane& plane, double spacing);
+
+// The same grid with each node moved along the plane's normal to the tie points' relief
+// there: StartFromTiePoints in the plane's frame (u, v, distance along the normal), so a
+// fountain's basin standing 1.5 m in front of its wall starts in front of it, not on the
+// wall. Throws std::runtime_error when fewer than options.min_points_total points lie over
+// the plane's extent.
+TinMesh MakeFittedTiePointMesh(const FittedPlane& plane, const std::vector<Eigen::Vector3d>& points,
+                               double spacing, const TiePointStartOptions& options,
+                               TiePointStartReport* report = nullptr);
 
 }  // namespace facets

@@ -53,6 +53,49 @@ TEST(StartFittedPlane, MeshLiesInThePlaneAndFacesTheViewpoint) {
   }
 }
 
+// A wall x = 0 (seen from +X), 8 m wide (y) and 4 m high (z), with a basin 3 m wide, 1 m
+// high, standing 1.2 m in front of it (x = 1.2) in the middle; tie points on both, 1 cm noise.
+std::vector<Eigen::Vector3d> WallWithBasin() {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> y(-4.0, 4.0), z(0.0, 4.0);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 3000; ++i) {
+    const double py = y(rng), pz = z(rng);
+    const bool on_basin = std::abs(py) < 1.5 && pz < 1.0;
+    points.emplace_back((on_basin ? 1.2 : 0.0) + noise(rng), py, pz);
+  }
+  return points;
+}
+
+TEST(StartFittedPlane, TiePointMeshFollowsTheReliefAlongTheNormal) {
+  const auto points = WallWithBasin();
+  const FittedPlane plane = FitStartPlane(points, Eigen::Vector3d(10.0, 0.0, 1.5));
+  EXPECT_GT(plane.normal.x(), 0.99);
+  TiePointStartReport report;
+  const TinMesh mesh = MakeFittedTiePointMesh(plane, points, 0.5, {}, &report);
+  EXPECT_EQ(report.nodes_from_plane, 0);
+  // Nodes on the basin's front stand at x = 1.2 within 0.2 m (the start's smoothing pass
+  // pulls a node beside a 1.2 m step about 0.15 m towards its neighbours), nodes well away
+  // from it on the wall at x = 0 within 5 cm; faces look to +X.
+  int on_basin = 0, on_wall = 0;
+  for (auto vh : mesh.vertices()) {
+    const Eigen::Vector3d p = ToEigen(mesh.point(vh));
+    if (std::abs(p.y()) < 1.0 && p.z() > 0.1 && p.z() < 0.7) {
+      EXPECT_NEAR(p.x(), 1.2, 0.2) << p.transpose();
+      ++on_basin;
+    } else if ((std::abs(p.y()) > 2.0 && std::abs(p.y()) < 3.5 && p.z() > 0.3 && p.z() < 3.7) || p.z() > 1.5) {
+      if (p.z() < 3.7 && std::abs(p.y()) < 3.7) {
+        EXPECT_NEAR(p.x(), 0.0, 0.05) << p.transpose();
+        ++on_wall;
+      }
+    }
+  }
+  EXPECT_GE(on_basin, 4);
+  EXPECT_GE(on_wall, 20);
+  for (auto fh : mesh.faces()) EXPECT_GT(ToEigen(mesh.calc_face_normal(fh)).dot(plane.normal), 0.0);
+}
+
 TEST(StartFittedPlane, HorizontalTerrainGivesSmallTilt) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> xy(-50.0, 50.0);
