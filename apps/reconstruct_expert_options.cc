@@ -115,7 +115,8 @@ void BindClosed(const OptionBinder& bind, ReconstructionOptions& options) {
              "visual hull: images that may see background at a kept voxel");
   bind.Negative("--no-hull-clamp", closed.hull_clamp, "let the surface leave the visual hull");
   bind.Value("--hull-constraint-voxel", closed.constraint_voxel,
-             "voxel edge of the hull the surface is held to after each level (m; 0 = the start's hull)");
+             "voxel edge of the hull the surface is held to after each level (m; 0 = the images' pixel footprint at "
+             "the region's centre, at most 64 million voxels)");
   bind.Value("--hull-rim-cos", closed.hull_rim_cos, "a vertex is on a hull rim where |normal . ray| <= this");
   bind.Value("--hull-rim-edges", closed.hull_rim_edges, "farthest push onto a hull rim, in edge lengths");
   bind.Switch("--hull-clamp-guard", closed.clamp_guard,

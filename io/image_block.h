@@ -9,6 +9,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -77,6 +78,21 @@ struct ImageBlock {
 
   const Camera& CameraOf(const BlockImage& image) const { return cameras.at(image.camera_id); }
 };
+
+// Median ground pixel of the block's images at `centre` (m): over the images, the
+// distance from the projection centre to `centre` divided by the focal length in pixels
+// (the mean of x and y); 0 for a block without images.
+inline double GroundPixel(const ImageBlock& block, const Eigen::Vector3d& centre) {
+  std::vector<double> gsd;
+  for (const auto& image : block.images) {
+    const Camera& camera = block.CameraOf(image);
+    const double focal = 0.5 * (camera.FocalX() + camera.FocalY());
+    gsd.push_back((centre - image.ProjectionCentre()).norm() / focal);
+  }
+  if (gsd.empty()) return 0.0;
+  std::nth_element(gsd.begin(), gsd.begin() + gsd.size() / 2, gsd.end());
+  return gsd[gsd.size() / 2];
+}
 
 // Moves every camera's principal point by (dx, dy) pixels (Camera::WithPrincipalPointShifted):
 // for a calibration made with another pixel convention than Facets' (camera.h).

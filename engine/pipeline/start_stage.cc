@@ -31,20 +31,6 @@ double ChooseStartHeight(const ImageBlock& block, const RegionOfInterest& roi, c
   throw std::runtime_error("no start height: give one, or a mean terrain height in the project, or tie points");
 }
 
-}  // namespace
-
-double GroundPixel(const ImageBlock& block, const Eigen::Vector3d& centre) {
-  std::vector<double> gsd;
-  for (const auto& image : block.images) {
-    const Camera& camera = block.CameraOf(image);
-    const double focal = 0.5 * (camera.FocalX() + camera.FocalY());
-    gsd.push_back((centre - image.ProjectionCentre()).norm() / focal);
-  }
-  return Median(gsd);
-}
-
-namespace {
-
 // The tie points inside the region and the mean projection centre, for the fitted start
 // plane; nullopt keeps the horizontal plane (ReconstructionOptions::start_plane).
 std::optional<FittedPlane> ChooseFittedPlane(const ImageBlock& block, const RegionOfInterest& roi,
@@ -180,6 +166,7 @@ StartPlan PlanStart(const ImageBlock& block, const ReconstructionOptions& option
   if (options.start_closed || !options.closed.mesh_file.empty()) {
     plan.closed = PrepareClosedStart(block, plan.roi, options.closed);
     say(plan.closed->Describe());
+    if (plan.closed->constraint_voxel) say("constraint hull: " + plan.closed->constraint_voxel->why);
   }
   plan.start_height = plan.closed ? plan.closed->centre.z() : ChooseStartHeight(block, plan.roi, options);
   Eigen::Vector3d centre = 0.5 * (plan.roi.min + plan.roi.max);

@@ -25,9 +25,6 @@ struct StartPlan {
   Eigen::Vector3d camera_up = Eigen::Vector3d::UnitZ();
 };
 
-// Median ground pixel of the original images at `centre` (m).
-double GroundPixel(const ImageBlock& block, const Eigen::Vector3d& centre);
-
 // Throws std::runtime_error when there is no region and no height to start from.
 StartPlan PlanStart(const ImageBlock& block, const ReconstructionOptions& options);
 

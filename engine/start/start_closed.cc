@@ -416,9 +416,10 @@ ClosedStart PrepareClosedStart(const ImageBlock& block, const RegionOfInterest& 
     start.hull_views = ReadHullViews(block, options.visual_hull.foreground);
     const HullViews& views = *start.hull_views;
     start.visual_hull = CarveVisualHull(views.cameras, views.cam_from_world, views.masks, box, options.visual_hull);
-    if (options.constraint_voxel > 0.0) {
+    start.constraint_voxel = ChooseConstraintVoxel(block, box, options.constraint_voxel, start.visual_hull->voxel);
+    if (start.constraint_voxel->voxel > 0.0) {
       VisualHullOptions fine = options.visual_hull;
-      fine.voxel_size = options.constraint_voxel;
+      fine.voxel_size = start.constraint_voxel->voxel;
       start.constraint_hull = CarveVisualHull(views.cameras, views.cam_from_world, views.masks, box, fine);
     }
     if (!options.hull_rims) start.hull_views.reset();  // one byte per pixel and image: only the rims need them

@@ -81,9 +81,9 @@ struct ClosedStartOptions {
   // the surface to the hull between the views' rims, after the finest level's last
   // adjustment (synthetic blob: object median 0.05 -> 0.27 GSD).
   bool hull_rims = false;
-  // Voxel edge of the hull these constraints use (0 = the start's hull): a finer hull
-  // keeps thin parts the start's 3x3x3-blurred voxels erode, without the mesher
-  // following its detail on the coarsest level.
+  // Voxel edge of the hull these constraints use (m; 0 = from the images,
+  // ChooseConstraintVoxel): a finer hull keeps thin parts the start's 3x3x3-blurred
+  // voxels erode, without the mesher following its detail on the coarsest level.
   double constraint_voxel = 0.0;
   // The inward pull halved, at last undone, where it folds a face or makes faces cross.
   // Off by default: on the synthetic blob the undone pulls leave spikes outside the hull
@@ -112,6 +112,7 @@ struct ClosedStart {
   std::optional<VisualHullGrid> visual_hull;  // shape "visual-hull"
   std::optional<HullViews> hull_views;        // the masks it was carved from (kept for hull_rims)
   std::optional<VisualHullGrid> constraint_hull;  // finer, ClosedStartOptions::constraint_voxel
+  std::optional<ConstraintVoxelChoice> constraint_voxel;  // how its voxel was chosen (visual hull)
   const VisualHullGrid* ConstraintHull() const {
     return constraint_hull ? &*constraint_hull : visual_hull ? &*visual_hull : nullptr;
   }

@@ -13,7 +13,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include "io/image_io.h"
 
@@ -96,6 +98,12 @@ void KeepLargestComponent(VisualHullGrid* grid) {
 
 }  // namespace
 
+Eigen::Vector3i VisualHullGridSize(const Eigen::AlignedBox3d& box, double voxel) {
+  Eigen::Vector3i size;
+  for (int a = 0; a < 3; ++a) size[a] = std::max(1, static_cast<int>(std::ceil(box.sizes()[a] / voxel)));
+  return size;
+}
+
 VisualHullGrid CarveVisualHull(const std::vector<Camera>& cameras,
                                const std::vector<Rigid3d>& cam_from_world,
                                const std::vector<PixelMask>& masks,
@@ -109,9 +117,7 @@ VisualHullGrid CarveVisualHull(const std::vector<Camera>& cameras,
   }
   VisualHullGrid grid;
   grid.voxel = options.voxel_size > 0.0 ? options.voxel_size : box.sizes().maxCoeff() / 200.0;
-  for (int a = 0; a < 3; ++a) {
-    grid.size[a] = std::max(1, static_cast<int>(std::ceil(box.sizes()[a] / grid.voxel)));
-  }
+  grid.size = VisualHullGridSize(box, grid.voxel);
   const long long total = static_cast<long long>(grid.size.x()) * grid.size.y() * grid.size.z();
   if (total > 400LL * 1000 * 1000) {
     throw std::invalid_argument("visual hull: more than 400 million voxels; give a larger voxel");
@@ -143,6 +149,57 @@ VisualHullGrid CarveVisualHull(const std::vector<Camera>& cameras,
   });
   KeepLargestComponent(&grid);
   return grid;
+}
+
+namespace {
+
+long long VoxelCount(const Eigen::AlignedBox3d& box, double voxel) {
+  const Eigen::Vector3d size = (box.sizes() / voxel).array().ceil().max(1.0);
+  return static_cast<long long>(size.prod());
+}
+
+std::string GridText(const Eigen::AlignedBox3d& box, double voxel) {
+  const Eigen::Vector3i size = VisualHullGridSize(box, voxel);
+  std::ostringstream out;
+  out << size.x() << " x " << size.y() << " x " << size.z() << " = " << VoxelCount(box, voxel) << " voxels";
+  return out.str();
+}
+
+}  // namespace
+
+ConstraintVoxelChoice ChooseConstraintVoxel(const ImageBlock& block, const Eigen::AlignedBox3d& box,
+                                            double given, double start_voxel) {
+  ConstraintVoxelChoice choice;
+  choice.footprint = GroundPixel(block, box.center());
+  std::ostringstream why;
+  why << "pixel footprint " << choice.footprint << " m at the box's centre (median over " << block.images.size()
+      << " images of distance / focal length)";
+  if (given > 0.0) {
+    choice.voxel = given;
+    choice.voxels = VoxelCount(box, given);
+    why << "; voxel " << given << " m given: " << GridText(box, given);
+    choice.why = why.str();
+    return choice;
+  }
+  double voxel = kConstraintVoxelFootprints * choice.footprint;
+  why << "; " << kConstraintVoxelFootprints << " footprint";
+  if (!(voxel > 0.0) || VoxelCount(box, voxel) > kMaxConstraintVoxels) {
+    voxel = std::cbrt(box.volume() / static_cast<double>(kMaxConstraintVoxels));
+    while (VoxelCount(box, voxel) > kMaxConstraintVoxels) voxel *= 1.001;
+    why << " needs more than " << kMaxConstraintVoxels << " voxels, so " << voxel << " m";
+  } else {
+    why << " " << voxel << " m";
+  }
+  if (!(voxel < start_voxel)) {
+    why << ", not finer than the start's " << start_voxel << " m voxels: the start's hull";
+    choice.why = why.str();
+    return choice;
+  }
+  choice.voxel = voxel;
+  choice.voxels = VoxelCount(box, voxel);
+  why << ": " << GridText(box, voxel) << " (at most " << kMaxConstraintVoxels << ")";
+  choice.why = why.str();
+  return choice;
 }
 
 HullViews ReadHullViews(const ImageBlock& block, const ForegroundOptions& foreground) {

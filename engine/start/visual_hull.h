@@ -54,6 +54,10 @@ struct VisualHullGrid {
   double Volume() const { return static_cast<double>(Count()) * voxel * voxel * voxel; }
 };
 
+// Voxels per axis of the grid over `box` with edge `voxel` (at least 1; the last one may
+// reach past the box).
+Eigen::Vector3i VisualHullGridSize(const Eigen::AlignedBox3d& box, double voxel);
+
 // The images a hull is carved from: camera, pose and foreground mask per image.
 struct HullViews {
   std::vector<Camera> cameras;
@@ -103,6 +107,31 @@ int PullInsideHull(const HullOccupancy& occupancy, const std::vector<Eigen::Vect
 int PushOntoHullRims(const HullOccupancy& occupancy, const HullViews& views,
                      const std::vector<Eigen::Vector3d>& directions, double max_move, double max_cos,
                      std::vector<Eigen::Vector3d>* points);
+
+// The voxel of the finer hull a closed start holds the surface to after each level (the
+// constraint hull, ClosedStartOptions::constraint_voxel), from the images when none is
+// given: the images' pixel footprint at the carved box's centre (GroundPixel: median over the images of the
+// distance from the projection centre over the focal length in pixels) times
+// kConstraintVoxelFootprints. A voxel is kept or carved by the one mask pixel its centre
+// projects to in each image, so a voxel of one footprint samples the silhouettes at their
+// own resolution: coarser loses outline (the 3x3x3 blur of SmoothHullOccupancy erodes
+// parts thinner than 2 voxels), finer adds voxels but no outline. No finer than the box
+// holds in kMaxConstraintVoxels voxels: carving holds 5 bytes a voxel (the grid and the
+// component labels), each constraint step 5 (the grid and its blurred occupancy), so at
+// most 320 MB. No finer hull when that voxel is not finer than the start's.
+inline constexpr double kConstraintVoxelFootprints = 1.0;
+inline constexpr long long kMaxConstraintVoxels = 64'000'000;
+
+struct ConstraintVoxelChoice {
+  double voxel = 0.0;      // edge of the constraint hull's voxels (m); 0: the start's hull serves
+  double footprint = 0.0;  // the images' pixel footprint at the box's centre (m)
+  long long voxels = 0;    // of the grid over the box at `voxel` (0 when voxel is 0)
+  std::string why;         // the rule and the figures in one line
+};
+
+// `given` > 0 wins (a hand-set voxel); `start_voxel`: the start hull's voxel (m).
+ConstraintVoxelChoice ChooseConstraintVoxel(const ImageBlock& block, const Eigen::AlignedBox3d& box,
+                                            double given, double start_voxel);
 
 // Closed, manifold triangle mesh of the grid's boundary (CGAL surface mesher on the
 // trilinear occupancy, level 1/2), triangles of about edge_length, normals outward.

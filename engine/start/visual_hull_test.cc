@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include "mesh/closed_surface.h"
 #include "visibility/embree_scene.h"
@@ -189,6 +190,53 @@ TEST(VisualHull, EmptySilhouettesGiveAClearError) {
   std::vector<Eigen::Vector3d> points;
   std::vector<Eigen::Vector3i> triangles;
   EXPECT_THROW(MeshVisualHull(grid, 0.02, &points, &triangles), std::runtime_error);
+}
+
+// Five images of one pinhole camera (focal 1024 px) at 1, 2, 2, 3 and 9 m from the
+// origin: the median footprint at the origin is 2 m / 1024 px = 1/512 m.
+ImageBlock FiveImagesAroundTheOrigin() {
+  ImageBlock block;
+  block.cameras[1] = Camera::Create(CameraModel::kPinhole, 1024, 1024, 512, 384, 1024, 768);
+  const Eigen::Vector3d centres[5] = {{1, 0, 0}, {0, 2, 0}, {-2, 0, 0}, {0, -3, 0}, {0, 0, 9}};
+  for (int i = 0; i < 5; ++i) {
+    BlockImage image;
+    image.image_id = i + 1;
+    image.camera_id = 1;
+    image.cam_from_world = Rigid3d(Eigen::Quaterniond::Identity(), -centres[i]);
+    block.images.push_back(image);
+  }
+  return block;
+}
+
+TEST(VisualHull, ConstraintVoxelIsOnePixelFootprintAtTheBoxCentre) {
+  const ImageBlock block = FiveImagesAroundTheOrigin();
+  const Eigen::AlignedBox3d box(Eigen::Vector3d(-0.125, -0.25, -0.5), Eigen::Vector3d(0.125, 0.25, 0.5));
+  // The start's hull: 1 m / 200 = 5 mm voxels.
+  const ConstraintVoxelChoice choice = ChooseConstraintVoxel(block, box, 0.0, 0.005);
+  EXPECT_EQ(choice.footprint, 1.0 / 512);
+  EXPECT_EQ(choice.voxel, 1.0 / 512);
+  EXPECT_EQ(choice.voxels, 128LL * 256 * 512);
+  EXPECT_NE(choice.why.find("128 x 256 x 512 = 16777216 voxels"), std::string::npos) << choice.why;
+
+  // A hand-set voxel wins, even a coarser one than the start's.
+  EXPECT_EQ(ChooseConstraintVoxel(block, box, 0.01, 0.005).voxel, 0.01);
+  // A footprint not finer than the start's voxels: no second hull.
+  const ConstraintVoxelChoice coarse = ChooseConstraintVoxel(block, box, 0.0, 1.0 / 512);
+  EXPECT_EQ(coarse.voxel, 0.0);
+  EXPECT_EQ(coarse.voxels, 0);
+  EXPECT_NE(coarse.why.find("the start's hull"), std::string::npos) << coarse.why;
+}
+
+TEST(VisualHull, ConstraintVoxelCountIsCapped) {
+  const ImageBlock block = FiveImagesAroundTheOrigin();
+  // A 1 m cube would need 512^3 = 134 million voxels of one footprint.
+  const Eigen::AlignedBox3d box(Eigen::Vector3d(-0.5, -0.5, -0.5), Eigen::Vector3d(0.5, 0.5, 0.5));
+  const ConstraintVoxelChoice choice = ChooseConstraintVoxel(block, box, 0.0, 0.005);
+  EXPECT_LE(choice.voxels, kMaxConstraintVoxels);
+  EXPECT_GT(choice.voxels, kMaxConstraintVoxels * 99 / 100);
+  EXPECT_GE(choice.voxel, 1.0 / 400);  // 400^3 = 64 million
+  EXPECT_LT(choice.voxel, 1.002 / 400);
+  EXPECT_NE(choice.why.find("needs more than 64000000 voxels"), std::string::npos) << choice.why;
 }
 
 }  // namespace
