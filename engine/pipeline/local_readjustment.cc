@@ -44,9 +44,9 @@ LocalReadjustment ReadjustAroundMovedVertices(TinMesh* mesh, const TinMesh& befo
   };
   const WindowReport was = probe(before);
   // One sweep: the local windows start from the adjusted level with their margins held at
-  // its values (LocalScope), so a second sweep would move little but the seams between
-  // them; on the rendered blocks it cost 35-40 % of the run for walls within about a
-  // point (docs/BENCHMARKS.md).
+  // its values (LocalScope), so a second sweep moves little but the seams between them;
+  // on the rendered blocks at level 1 it cost 34-41 % of the run's CPU time for walls
+  // within 2.5 points (docs/BENCHMARKS.md).
   LevelWindowOptions local_options = options;
   local_options.sweeps = 1;
   result.level = AdjustLevelInWindows(mesh, images, adjustment, local_options, keep_grey, progress, &scope);
