@@ -3,6 +3,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/box_intersection_d.h>
 
 #include <Eigen/Geometry>
 #include <Eigen/Sparse>
@@ -38,36 +39,80 @@ std::vector<Eigen::Vector3d> Points(const TinMesh& mesh) {
   return points;
 }
 
-// The crossing pairs among `faces` (all faces when null).
+// A TIN's chord triangles as a CGAL mesh (vertex and face indices those of the TIN),
+// built once and tested again as its points move.
+class ChordMesh {
+ public:
+  ChordMesh(const TinMesh& mesh, const std::vector<Eigen::Vector3d>& points) {
+    for (auto v : mesh.vertices()) cgal_.add_vertex(ToCgal(points[v.idx()]));  // index = v.idx()
+    // CGAL face index = TIN face index: faces added in order.
+    for (auto f : mesh.faces()) {
+      CgalMesh::Vertex_index t[3];
+      int k = 0;
+      for (auto v : mesh.fv_range(f)) t[k++] = CgalMesh::Vertex_index(static_cast<CgalMesh::size_type>(v.idx()));
+      cgal_.add_face(t[0], t[1], t[2]);
+    }
+  }
+
+  void Move(const std::vector<Eigen::Vector3d>& points, const std::vector<int>& vertices) {
+    for (int v : vertices) cgal_.point(CgalMesh::Vertex_index(static_cast<CgalMesh::size_type>(v))) = ToCgal(points[v]);
+  }
+
+  // The crossing pairs among `faces` (all faces when null).
+  std::set<std::pair<int, int>> CrossingPairs(const std::vector<int>* faces) const {
+    std::vector<std::pair<CgalMesh::Face_index, CgalMesh::Face_index>> pairs;
+    if (faces) {
+      std::vector<CgalMesh::Face_index> range;
+      range.reserve(faces->size());
+      for (int f : *faces) range.emplace_back(static_cast<CgalMesh::size_type>(f));
+      CGAL::Polygon_mesh_processing::self_intersections(range, cgal_, std::back_inserter(pairs));
+    } else {
+      CGAL::Polygon_mesh_processing::self_intersections(cgal_, std::back_inserter(pairs));
+    }
+    std::set<std::pair<int, int>> result;
+    for (const auto& [a, b] : pairs) {
+      const int i = static_cast<int>(a), j = static_cast<int>(b);
+      result.emplace(std::min(i, j), std::max(i, j));
+    }
+    return result;
+  }
+
+  // The faces whose boxes meet the box of a face of `changed` (those included): every
+  // face that can cross one of them.
+  std::vector<int> FacesMeeting(const std::vector<bool>& changed) const {
+    std::vector<FaceBox> all, moved;
+    all.reserve(cgal_.number_of_faces());
+    for (auto f : cgal_.faces()) {
+      all.emplace_back(Box(f), static_cast<int>(f));
+      if (changed[static_cast<int>(f)]) moved.push_back(all.back());
+    }
+    std::vector<bool> meets(changed);
+    CGAL::box_intersection_d(moved.begin(), moved.end(), all.begin(), all.end(),
+                             [&meets](const FaceBox&, const FaceBox& b) { meets[b.info()] = true; });
+    std::vector<int> faces;
+    for (size_t f = 0; f < meets.size(); ++f) {
+      if (meets[f]) faces.push_back(static_cast<int>(f));
+    }
+    return faces;
+  }
+
+ private:
+  using FaceBox = CGAL::Box_intersection_d::Box_with_info_d<double, 3, int>;
+
+  static Kernel::Point_3 ToCgal(const Eigen::Vector3d& p) { return Kernel::Point_3(p.x(), p.y(), p.z()); }
+
+  CGAL::Bbox_3 Box(CgalMesh::Face_index f) const {
+    CGAL::Bbox_3 box;
+    for (auto v : cgal_.vertices_around_face(cgal_.halfedge(f))) box += cgal_.point(v).bbox();
+    return box;
+  }
+
+  CgalMesh cgal_;
+};
+
 std::set<std::pair<int, int>> CrossingPairsAmong(const TinMesh& mesh, const std::vector<Eigen::Vector3d>& points,
                                                  const std::vector<int>* faces) {
-  CgalMesh cgal;
-  for (auto v : mesh.vertices()) {
-    const Eigen::Vector3d& p = points[v.idx()];
-    cgal.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z()));  // index = v.idx()
-  }
-  // CGAL face index = TIN face index: faces added in order.
-  for (auto f : mesh.faces()) {
-    CgalMesh::Vertex_index t[3];
-    int k = 0;
-    for (auto v : mesh.fv_range(f)) t[k++] = CgalMesh::Vertex_index(static_cast<CgalMesh::size_type>(v.idx()));
-    cgal.add_face(t[0], t[1], t[2]);
-  }
-  std::vector<std::pair<CgalMesh::Face_index, CgalMesh::Face_index>> pairs;
-  if (faces) {
-    std::vector<CgalMesh::Face_index> range;
-    range.reserve(faces->size());
-    for (int f : *faces) range.emplace_back(static_cast<CgalMesh::size_type>(f));
-    CGAL::Polygon_mesh_processing::self_intersections(range, cgal, std::back_inserter(pairs));
-  } else {
-    CGAL::Polygon_mesh_processing::self_intersections(cgal, std::back_inserter(pairs));
-  }
-  std::set<std::pair<int, int>> result;
-  for (const auto& [a, b] : pairs) {
-    const int i = static_cast<int>(a), j = static_cast<int>(b);
-    result.emplace(std::min(i, j), std::max(i, j));
-  }
-  return result;
+  return ChordMesh(mesh, points).CrossingPairs(faces);
 }
 
 std::set<std::pair<int, int>> SelfIntersectingPairs(const TinMesh& mesh,
@@ -116,21 +161,56 @@ VertexMoves MeasureVertexMoves(const TinMesh& mesh, const std::vector<Eigen::Vec
   return result;
 }
 
+namespace {
+
+// The crossing pairs once the vertices `moved` went to `points`, from the pairs before
+// the move: a pair of faces none of whose vertices moved stays as it was; the faces
+// around the moved vertices are tested against every face whose box meets theirs.
+// The same pairs as a test of the whole mesh, at the cost of the faces near the moves.
+std::set<std::pair<int, int>> CrossingPairsAfterMoves(const TinMesh& mesh, ChordMesh* chords,
+                                                      const std::vector<Eigen::Vector3d>& points,
+                                                      const std::vector<int>& moved,
+                                                      const std::set<std::pair<int, int>>& pairs_before) {
+  chords->Move(points, moved);
+  std::vector<bool> changed(mesh.n_faces(), false);
+  for (int v : moved) {
+    for (auto f : mesh.vf_range(mesh.vertex_handle(v))) changed[f.idx()] = true;
+  }
+  const std::vector<int> near = chords->FacesMeeting(changed);
+  std::set<std::pair<int, int>> pairs = chords->CrossingPairs(&near);
+  for (const auto& pair : pairs_before) {
+    if (!changed[pair.first] && !changed[pair.second]) pairs.insert(pair);
+  }
+  return pairs;
+}
+
+}  // namespace
+
 int LimitFoldingSteps(TinMesh* mesh, const std::vector<Eigen::Vector3d>& before, int halvings,
                       KnownCrossings* crossings) {
   const std::vector<Eigen::Vector3d> normals_before = FaceNormals(*mesh, before);
   std::vector<bool> folded_before(mesh->n_faces(), false);
   for (auto f : mesh->faces()) folded_before[f.idx()] = Folded(*mesh, normals_before, f);
+  const bool carried = crossings && crossings->known;
+  std::vector<int> moved(mesh->n_vertices());  // the vertices whose points the chords do not hold yet
+  for (auto v : mesh->vertices()) moved[v.idx()] = v.idx();
+  ChordMesh chords(*mesh, before);
   const std::set<std::pair<int, int>> crossing_before =
-      crossings && crossings->known ? std::move(crossings->pairs) : SelfIntersectingPairs(*mesh, before);
+      carried ? std::move(crossings->pairs) : chords.CrossingPairs(nullptr);
   if (crossings) crossings->known = false;
+  std::set<std::pair<int, int>> crossing_now;
   std::vector<bool> limited(mesh->n_vertices(), false);
   for (int round = 0; round <= halvings; ++round) {
     const std::vector<Eigen::Vector3d> points = Points(*mesh);
     const std::vector<Eigen::Vector3d> normals = FaceNormals(*mesh, points);
     std::vector<bool> shrink(mesh->n_vertices(), false);
     bool any = false;
-    std::set<std::pair<int, int>> crossing_now = SelfIntersectingPairs(*mesh, points);
+    if (round == 0) {
+      chords.Move(points, moved);
+      crossing_now = chords.CrossingPairs(nullptr);
+    } else {
+      crossing_now = CrossingPairsAfterMoves(*mesh, &chords, points, moved, crossing_now);
+    }
     // Triangles that now cross where they did not before.
     for (const auto& pair : crossing_now) {
       if (crossing_before.count(pair)) continue;
@@ -151,9 +231,11 @@ int LimitFoldingSteps(TinMesh* mesh, const std::vector<Eigen::Vector3d>& before,
       if (crossings) *crossings = {std::move(crossing_now), true};
       break;
     }
+    moved.clear();
     for (auto v : mesh->vertices()) {
       if (!shrink[v.idx()]) continue;
       limited[v.idx()] = true;
+      moved.push_back(v.idx());
       const Eigen::Vector3d p = ToEigen(mesh->point(v));
       // The last round undoes the step: the surface before it was valid here.
       const Eigen::Vector3d q = round == halvings ? before[v.idx()] : before[v.idx()] + 0.5 * (p - before[v.idx()]);

@@ -30,7 +30,9 @@ int CountSelfIntersections(const TinMesh& mesh);
 // `crossings`, when given, carries the crossing face pairs from one step to the next of
 // the same mesh: read as the pairs of `before` when known, left as the pairs of the
 // final points when the last test saw them (no step needed halving after it), so a
-// sequence of steps tests crossings once per step instead of twice.
+// sequence of steps tests crossings once per step instead of twice. The halving rounds
+// after the first test only the faces around the vertices just halved against the faces
+// whose boxes meet theirs; the other pairs are kept (the same pairs as a whole test).
 struct KnownCrossings {
   std::set<std::pair<int, int>> pairs;  // face index pairs, smaller index first
   bool known = false;

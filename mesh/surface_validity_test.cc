@@ -85,6 +85,38 @@ TEST(SurfaceValidity, CarriedCrossingsGiveTheSameGuardedSteps) {
   EXPECT_GT(limited[1], 0);
 }
 
+// A step halved twice on a 9 x 9 grid that already crosses itself elsewhere: the rounds
+// after the first test only the faces near the halved vertices, and the pairs they leave
+// are those of the whole surface, the old crossing far away among them.
+TEST(SurfaceValidity, HalvedRoundsKeepTheCrossingsFarAway) {
+  StartGridOptions grid;
+  grid.min = Eigen::Vector2d(0, 0);
+  grid.max = Eigen::Vector2d(8, 8);
+  grid.spacing = 1.0;
+  TinMesh mesh = MakeStartGrid(grid);
+  auto at = [&mesh](double x, double y) -> TinMesh::VertexHandle {
+    for (auto v : mesh.vertices()) {
+      if (std::abs(mesh.point(v)[0] - x) < 1e-9 && std::abs(mesh.point(v)[1] - y) < 1e-9) return v;
+    }
+    return TinMesh::VertexHandle();
+  };
+  const auto far = at(6, 6), moved = at(2, 2);
+  ASSERT_TRUE(far.is_valid() && moved.is_valid());
+  mesh.set_point(far, ToOpenMesh(Eigen::Vector3d(7.5, 6.0, 0.0)));  // across its ring: an old crossing
+  const int old_pairs = CountSelfIntersections(mesh);
+  ASSERT_GT(old_pairs, 0);
+  const std::vector<Eigen::Vector3d> before = Points(mesh);
+  // 3 m sideways: folded at 5 and 3.5, inside its ring at 2.75.
+  mesh.set_point(moved, ToOpenMesh(Eigen::Vector3d(5.0, 2.0, 0.0)));
+  KnownCrossings crossings;
+  EXPECT_GT(LimitFoldingSteps(&mesh, before, kFoldGuardHalvings, &crossings), 0);
+  EXPECT_NEAR(mesh.point(moved)[0], 2.75, 1e-12);
+  EXPECT_EQ(mesh.point(far), ToOpenMesh(before[far.idx()]));
+  ASSERT_TRUE(crossings.known);
+  EXPECT_EQ(static_cast<int>(crossings.pairs.size()), CountSelfIntersections(mesh));
+  EXPECT_EQ(static_cast<int>(crossings.pairs.size()), old_pairs);
+}
+
 TEST(SurfaceValidity, UnseenVertexRelaxesToItsRing) {
   TinMesh mesh = Grid();
   const auto c = Centre(mesh);

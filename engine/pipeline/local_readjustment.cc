@@ -43,7 +43,13 @@ LocalReadjustment ReadjustAroundMovedVertices(TinMesh* mesh, const TinMesh& befo
     return AdjustLevelInWindows(&copy, images, probe_adjustment, probe_options, false, nullptr, &scope).summary;
   };
   const WindowReport was = probe(before);
-  result.level = AdjustLevelInWindows(mesh, images, adjustment, options, keep_grey, progress, &scope);
+  // One sweep: the local windows start from the adjusted level with their margins held at
+  // its values (LocalScope), so a second sweep moves little but the seams between them;
+  // on the rendered blocks at level 1 it cost 34-41 % of the run's CPU time for walls
+  // within 2.5 points (docs/BENCHMARKS.md).
+  LevelWindowOptions local_options = options;
+  local_options.sweeps = 1;
+  result.level = AdjustLevelInWindows(mesh, images, adjustment, local_options, keep_grey, progress, &scope);
   const WindowReport after = probe(*mesh);
   result.sigma0_before = was.sigma0;
   result.sigma0_after = after.sigma0;

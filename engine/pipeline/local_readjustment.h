@@ -31,7 +31,8 @@ struct LocalReadjustment {
 // the faces around moved vertices may be flipped, as the crease straightening does:
 // those faces are in the local windows' cores, so no grey value of `adjusted` is taken
 // for them by face index); `adjusted` is the adjustment `before` came from. Windows over
-// the faces within `rings` edge rings of the moved vertices are adjusted in place.
+// the faces within `rings` edge rings of the moved vertices are adjusted in place, one
+// sweep over them whatever `options.sweeps` says.
 LocalReadjustment ReadjustAroundMovedVertices(TinMesh* mesh, const TinMesh& before,
                                               const LevelAdjustment& adjusted, int rings,
                                               const WindowImages& images,

@@ -45,8 +45,14 @@ void SplitStretchedEdges(const RunContext& run, LevelPass* pass) {
   run.Say(pass->Prefix() + " corners: " + std::to_string(split.splits) + " stretched edges split, " +
           std::to_string(mesh.n_faces()) + " faces; adjusted again");
   const auto clock = run.profile->Part("level re-adjustment");
+  // One sweep with the margins held: the level was adjusted just before the splits, so
+  // the neighbours' values are already converged ones (the level's own first sweep frees
+  // the margins because its start is not).
+  LevelWindowOptions windows = run.options.windows;
+  windows.sweeps = 1;
+  windows.free_margin_sweeps = 0;
   pass->adjusted = AdjustLevelInWindows(&mesh, run.images.ForWindows(pass->level), pass->adjustment,
-                                        run.options.windows, pass->Finest(run), run.options.progress);
+                                        windows, pass->Finest(run), run.options.progress);
 }
 
 WallCornerOptions CornerOptions(const RunContext& run, const LevelPass& pass) {
