@@ -141,6 +141,10 @@ void ApplyScenePreset(ScenePreset preset, ReconstructionOptions* options) {
       options->wall_corners = true;
       options->wall_feet = true;
       options->wall_eaves = true;
+      // Two flat iterations end a window run: the aerial path's windows and trials stall at
+      // walls and eaves the level cannot represent; the seed scenes' windows keep the
+      // library's 4 (one step may grow once before they converge).
+      options->adjustment.stall_iterations = 2;
       break;
     case ScenePreset::kFacade:
       options->start_plane = ReconstructionOptions::StartPlane::kFitted;
