@@ -11,22 +11,25 @@
 namespace facets {
 namespace {
 
-// 5 x 5 grid of 1 m over z = 0; the centre vertex is interior.
-TinMesh Grid() {
+// (cells + 1) x (cells + 1) grid of 1 m over z = 0; by default 5 x 5, whose centre vertex is interior.
+TinMesh Grid(int cells = 4) {
   StartGridOptions grid;
   grid.min = Eigen::Vector2d(0, 0);
-  grid.max = Eigen::Vector2d(4, 4);
+  grid.max = Eigen::Vector2d(cells, cells);
   grid.spacing = 1.0;
   return MakeStartGrid(grid);
 }
 
-TinMesh::VertexHandle Centre(const TinMesh& mesh) {
+// The grid vertex at (x, y); invalid when there is none.
+TinMesh::VertexHandle VertexAt(const TinMesh& mesh, double x, double y) {
   for (auto v : mesh.vertices()) {
     const auto p = mesh.point(v);
-    if (std::abs(p[0] - 2) < 1e-9 && std::abs(p[1] - 2) < 1e-9) return v;
+    if (std::abs(p[0] - x) < 1e-9 && std::abs(p[1] - y) < 1e-9) return v;
   }
   return TinMesh::VertexHandle();
 }
+
+TinMesh::VertexHandle Centre(const TinMesh& mesh) { return VertexAt(mesh, 2, 2); }
 
 std::vector<Eigen::Vector3d> Points(const TinMesh& mesh) {
   std::vector<Eigen::Vector3d> p;
@@ -89,18 +92,8 @@ TEST(SurfaceValidity, CarriedCrossingsGiveTheSameGuardedSteps) {
 // after the first test only the faces near the halved vertices, and the pairs they leave
 // are those of the whole surface, the old crossing far away among them.
 TEST(SurfaceValidity, HalvedRoundsKeepTheCrossingsFarAway) {
-  StartGridOptions grid;
-  grid.min = Eigen::Vector2d(0, 0);
-  grid.max = Eigen::Vector2d(8, 8);
-  grid.spacing = 1.0;
-  TinMesh mesh = MakeStartGrid(grid);
-  auto at = [&mesh](double x, double y) -> TinMesh::VertexHandle {
-    for (auto v : mesh.vertices()) {
-      if (std::abs(mesh.point(v)[0] - x) < 1e-9 && std::abs(mesh.point(v)[1] - y) < 1e-9) return v;
-    }
-    return TinMesh::VertexHandle();
-  };
-  const auto far = at(6, 6), moved = at(2, 2);
+  TinMesh mesh = Grid(8);
+  const auto far = VertexAt(mesh, 6, 6), moved = VertexAt(mesh, 2, 2);
   ASSERT_TRUE(far.is_valid() && moved.is_valid());
   mesh.set_point(far, ToOpenMesh(Eigen::Vector3d(7.5, 6.0, 0.0)));  // across its ring: an old crossing
   const int old_pairs = CountSelfIntersections(mesh);
@@ -128,11 +121,7 @@ TEST(SurfaceValidity, UnseenVertexRelaxesToItsRing) {
 }
 
 TEST(SurfaceValidity, CrossingTrianglesAreUntangledLocally) {
-  StartGridOptions grid;
-  grid.min = Eigen::Vector2d(0, 0);
-  grid.max = Eigen::Vector2d(8, 8);
-  grid.spacing = 1.0;
-  TinMesh mesh = MakeStartGrid(grid);
+  TinMesh mesh = Grid(8);
   const std::vector<Eigen::Vector3d> flat = Points(mesh);
   TinMesh::VertexHandle c;
   for (auto v : mesh.vertices()) {
