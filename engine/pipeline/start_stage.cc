@@ -82,7 +82,7 @@ TinMesh StartPlane(const RegionOfInterest& roi, double height, double spacing) {
 TinMesh OpenStart(const RunContext& run, const StartPlan& plan, ReconstructionReport* report) {
   const ReconstructionOptions& options = run.options;
   const double spacing = run.EdgeLength(run.coarsest);
-  const std::vector<Eigen::Vector3d> points = TiePointsInRegion(run.block, plan.roi);
+  const std::vector<Eigen::Vector3d> points = TiePointsOverFootprint(run.block, plan.roi);
   const bool plane_chosen = options.start_height.has_value() || options.lifting_steps > 0;
   if (!UseTiePointStart(options.start, static_cast<int>(points.size()), plane_chosen, options.tiepoint_start)) {
     return StartPlane(plan.roi, plan.start_height, spacing);

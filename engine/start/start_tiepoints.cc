@@ -305,7 +305,7 @@ void TiePointStartOptions::Check() const {
 
 std::string TiePointStartReport::Brief() const {
   std::ostringstream out;
-  out << points_in_region << " tie points in the region (" << points_rejected_by_plane
+  out << points_in_region << " tie points over the region (" << points_rejected_by_plane
       << " off the robust plane z = " << plane[0] << " + " << plane[1] << " x + " << plane[2]
       << " y), " << nodes << " nodes: " << nodes_from_points << " from their points, "
       << nodes_from_plane << " from the plane";
@@ -343,6 +343,18 @@ std::vector<Eigen::Vector3d> TiePointsInRegion(const ImageBlock& block, const Re
   return inside;
 }
 
+bool OverFootprint(const RegionOfInterest& roi, const Eigen::Vector3d& p) {
+  return p.x() >= roi.min.x() && p.x() <= roi.max.x() && p.y() >= roi.min.y() && p.y() <= roi.max.y();
+}
+
+std::vector<Eigen::Vector3d> TiePointsOverFootprint(const ImageBlock& block, const RegionOfInterest& roi) {
+  std::vector<Eigen::Vector3d> over;
+  for (const auto& p : block.points) {
+    if (OverFootprint(roi, p.xyz)) over.push_back(p.xyz);
+  }
+  return over;
+}
+
 TiePointHeightGrid FitTiePointHeights(const std::vector<Eigen::Vector3d>& all_points,
                                       const RegionOfInterest& roi, double spacing,
                                       const TiePointStartOptions& options, TiePointStartReport* report) {
@@ -350,11 +362,11 @@ TiePointHeightGrid FitTiePointHeights(const std::vector<Eigen::Vector3d>& all_po
   if (!(spacing > 0)) throw std::invalid_argument("tie-point start: spacing must be > 0");
   std::vector<Eigen::Vector3d> points;
   for (const auto& p : all_points) {
-    if (roi.Contains(p)) points.push_back(p);
+    if (OverFootprint(roi, p)) points.push_back(p);
   }
   if (static_cast<int>(points.size()) < options.min_points_total) {
     throw std::runtime_error("tie-point start: " + std::to_string(points.size()) +
-                             " tie points in the region of interest, need at least " +
+                             " tie points over the region of interest, need at least " +
                              std::to_string(options.min_points_total));
   }
   TiePointStartReport local;

@@ -64,8 +64,9 @@ struct TiePointStartReport {
 };
 
 // Heights on the grid MakeStartGrid builds for (min, max, spacing): (nx + 1) x (ny + 1)
-// nodes, row-major from min. Throws std::runtime_error when fewer than
-// options.min_points_total points lie in the region.
+// nodes, row-major from min, fitted to the points over the region's XY rectangle at any
+// height (the robust plane and the local consensus drop blunders). Throws
+// std::runtime_error when fewer than options.min_points_total points lie over it.
 struct TiePointHeightGrid {
   Eigen::Vector2d min = Eigen::Vector2d::Zero(), max = Eigen::Vector2d::Zero();
   int nx = 0, ny = 0;
@@ -97,5 +98,11 @@ bool UseTiePointStart(StartSurfaceKind kind, int points_in_region, bool plane_he
 
 // Tie points of the block inside the region's XY rectangle and Z range.
 std::vector<Eigen::Vector3d> TiePointsInRegion(const ImageBlock& block, const RegionOfInterest& roi);
+// Whether p lies over the region's XY rectangle, at any height.
+bool OverFootprint(const RegionOfInterest& roi, const Eigen::Vector3d& p);
+// Tie points of the block over the region's XY rectangle, at any height: an aerial start
+// needs the points of the tallest roofs, which a region derived from the tie points'
+// height percentiles (engine/pipeline/region_choice.h) leaves above its Z range.
+std::vector<Eigen::Vector3d> TiePointsOverFootprint(const ImageBlock& block, const RegionOfInterest& roi);
 
 }  // namespace facets

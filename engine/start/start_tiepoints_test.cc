@@ -108,13 +108,54 @@ TEST(StartTiePoints, ExactPlaneIsReproduced) {
   EXPECT_LT(worst, 1e-9);
 }
 
+// A tower 10 x 10 m and 25 m tall on flat ground: its roof's tie points lie above a
+// region whose height range ends at 10 m (as one taken from the points' height
+// percentiles does), and still lift the start's nodes over the tower to the roof.
+TEST(StartTiePoints, TowerRoofAboveTheRegionsHeightRangeLiftsItsNodes) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> ux(-40, 40), uy(-35, 35), roof(-5, 5);
+  std::normal_distribution<double> noise(0, 0.03);
+  ImageBlock block;
+  auto add = [&block](const Eigen::Vector3d& p) {
+    TiePoint point;
+    point.xyz = p;
+    block.points.push_back(point);
+  };
+  while (block.points.size() < 400) {
+    const double x = ux(rng), y = uy(rng);
+    if (std::abs(x) < 5.5 && std::abs(y) < 5.5) continue;  // the tower's walls hide the ground
+    add(Eigen::Vector3d(x, y, noise(rng)));
+  }
+  for (int i = 0; i < 40; ++i) add(Eigen::Vector3d(roof(rng), roof(rng), 25.0 + noise(rng)));
+  add(Eigen::Vector3d(60.0, 0.0, 25.0));  // beyond the region's XY rectangle
+  RegionOfInterest region = Region();
+  region.min.z() = -1.0;
+  region.max.z() = 10.0;
+
+  const std::vector<Eigen::Vector3d> over = TiePointsOverFootprint(block, region);
+  ASSERT_EQ(over.size(), 440u);
+  EXPECT_EQ(TiePointsInRegion(block, region).size(), 400u);
+  TiePointStartReport report;
+  const TiePointHeightGrid grid = FitTiePointHeights(over, region, 4.0, {}, &report);
+  std::cout << report.Brief() << "; node heights over the tower centre " << grid.At(0, 0) << ", its edges "
+            << grid.At(-4, 0) << " " << grid.At(4, 0) << " m\n";
+  EXPECT_EQ(report.points_in_region, 440);
+  EXPECT_NEAR(grid.At(0, 0), 25.0, 0.1);
+  EXPECT_GT(grid.At(4, 0), 20.0);  // 1 m inside the roof's edge
+  EXPECT_GT(grid.At(-4, 0), 20.0);
+  EXPECT_NEAR(grid.At(-20, 15), 0.0, 0.1);
+  // The points inside the region's box alone leave the tower on the ground.
+  const TiePointHeightGrid clipped = FitTiePointHeights(TiePointsInRegion(block, region), region, 4.0);
+  EXPECT_NEAR(clipped.At(0, 0), 0.0, 0.5);
+}
+
 TEST(StartTiePoints, TooFewPointsAndAutoChoice) {
   const std::vector<Eigen::Vector3d> few = Points(10, 3);
   try {
     FitTiePointHeights(few, Region(), 4.0);
     FAIL() << "expected an error";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("10 tie points in the region"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("10 tie points over the region"), std::string::npos) << e.what();
   }
   const TiePointStartOptions options;
   EXPECT_TRUE(UseTiePointStart(StartSurfaceKind::kAuto, 20, false, options));
