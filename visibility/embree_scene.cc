@@ -145,8 +145,6 @@ TriangleScene::TriangleScene(EmbreeDevice& device,
 
 TriangleScene::~TriangleScene() {
   if (occluder_ != nullptr) rtcReleaseGeometry(occluder_);
-  if (occluder_mesh_ != nullptr) rtcReleaseGeometry(occluder_mesh_);
-  if (occluder_scene_ != nullptr) rtcReleaseScene(occluder_scene_);
   rtcReleaseGeometry(geometry_);
   rtcReleaseScene(scene_);
 }
@@ -171,20 +169,22 @@ void TriangleScene::UpdateVertices(const std::vector<Eigen::Vector3d>& vertices,
   device_.Check();
 }
 
-void TriangleScene::AddOccluders(const std::vector<Eigen::Vector3d>& vertices,
-                                 const std::vector<Eigen::Vector3i>& triangles) {
-  if (occluder_ != nullptr) throw std::logic_error("TriangleScene: occluders already added");
-  if (triangles.empty()) return;
-  occluder_scene_ = rtcNewScene(device_.get());
-  rtcSetSceneFlags(occluder_scene_, RTC_SCENE_FLAG_ROBUST);
-  rtcSetSceneBuildQuality(occluder_scene_, RTC_BUILD_QUALITY_MEDIUM);
-  occluder_mesh_ = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
+OccluderScene::OccluderScene(EmbreeDevice& device, const std::vector<Eigen::Vector3d>& vertices,
+                             const std::vector<Eigen::Vector3i>& triangles)
+    : device_(device), num_triangles_(triangles.size()) {
+  scene_ = rtcNewScene(device_.get());
+  rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_MEDIUM);
+  if (triangles.empty()) {
+    rtcCommitScene(scene_);
+    device_.Check();
+    return;
+  }
+  mesh_ = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
   auto* vertex_buffer = static_cast<float*>(rtcSetNewGeometryBuffer(
-      occluder_mesh_, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 4 * sizeof(float),
-      vertices.size()));
+      mesh_, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 4 * sizeof(float), vertices.size()));
   auto* index_buffer = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-      occluder_mesh_, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
-      triangles.size()));
+      mesh_, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), triangles.size()));
   device_.Check();
   for (size_t i = 0; i < vertices.size(); ++i) {
     for (int k = 0; k < 3; ++k) vertex_buffer[4 * i + k] = static_cast<float>(vertices[i][k]);
@@ -194,17 +194,39 @@ void TriangleScene::AddOccluders(const std::vector<Eigen::Vector3d>& vertices,
     for (int k = 0; k < 3; ++k) {
       const int index = triangles[i][k];
       if (index < 0 || static_cast<size_t>(index) >= vertices.size()) {
-        throw std::invalid_argument("TriangleScene: occluder triangle " + std::to_string(i) +
+        throw std::invalid_argument("OccluderScene: triangle " + std::to_string(i) +
                                     " has vertex index out of range");
       }
       index_buffer[3 * i + k] = static_cast<unsigned>(index);
     }
   }
-  rtcCommitGeometry(occluder_mesh_);
-  rtcAttachGeometry(occluder_scene_, occluder_mesh_);
-  rtcCommitScene(occluder_scene_);
+  rtcCommitGeometry(mesh_);
+  rtcAttachGeometry(scene_, mesh_);
+  rtcCommitScene(scene_);
+  device_.Check();
+}
+
+OccluderScene::~OccluderScene() {
+  if (mesh_ != nullptr) rtcReleaseGeometry(mesh_);
+  rtcReleaseScene(scene_);
+}
+
+void TriangleScene::AddOccluders(const std::vector<Eigen::Vector3d>& vertices,
+                                 const std::vector<Eigen::Vector3i>& triangles) {
+  if (occluder_ != nullptr) throw std::logic_error("TriangleScene: occluders already added");
+  if (triangles.empty()) return;
+  AddOccluders(std::make_shared<const OccluderScene>(device_, vertices, triangles));
+}
+
+void TriangleScene::AddOccluders(std::shared_ptr<const OccluderScene> occluders) {
+  if (occluder_ != nullptr) throw std::logic_error("TriangleScene: occluders already added");
+  if (!occluders || occluders->NumTriangles() == 0) return;
+  if (&occluders->device() != &device_) {
+    throw std::invalid_argument("TriangleScene: the occluders belong to another Embree device");
+  }
+  occluder_scene_ = std::move(occluders);
   occluder_ = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_INSTANCE);
-  rtcSetGeometryInstancedScene(occluder_, occluder_scene_);
+  rtcSetGeometryInstancedScene(occluder_, occluder_scene_->get());
   rtcSetGeometryTimeStepCount(occluder_, 1);
   const float identity[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};  // 3x4 column-major
   rtcSetGeometryTransform(occluder_, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, identity);

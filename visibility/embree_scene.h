@@ -86,6 +86,29 @@ struct RayHit {
   Eigen::Vector3f geom_normal;  // unnormalised, (V1-V0) x (V2-V0)
 };
 
+// A static triangle set that stops rays but is not part of a surface (the rest of the
+// surface around a window), in its own Embree scene whose BVH is built once. Scenes
+// instance it (TriangleScene::AddOccluders), so one build serves every scene of the
+// same device that shares it: a window's runs with the same surroundings.
+class OccluderScene {
+ public:
+  OccluderScene(EmbreeDevice& device, const std::vector<Eigen::Vector3d>& vertices,
+                const std::vector<Eigen::Vector3i>& triangles);
+  ~OccluderScene();
+  OccluderScene(const OccluderScene&) = delete;
+  OccluderScene& operator=(const OccluderScene&) = delete;
+
+  RTCScene get() const { return scene_; }
+  const EmbreeDevice& device() const { return device_; }
+  size_t NumTriangles() const { return num_triangles_; }
+
+ private:
+  EmbreeDevice& device_;
+  RTCScene scene_ = nullptr;
+  RTCGeometry mesh_ = nullptr;
+  size_t num_triangles_ = 0;
+};
+
 // One triangle mesh in its own scene.
 class TriangleScene {
  public:
@@ -107,11 +130,13 @@ class TriangleScene {
 
   // Adds a second, static triangle set that stops rays but is not part of the
   // surface: the rest of the surface around a window, which hides parts of the window
-  // from oblique views. Once per scene, before any query. The occluders live in their
-  // own static Embree scene (BVH built once), instanced into this one as geometry id 1
-  // (identity transform): recommitting this scene after UpdateVertices then refits or
-  // rebuilds only the surface, not the occluders. A ray stopped by them has
-  // hit.instID[0] == 1 (hit.geomID is 0, the geometry inside the instanced scene).
+  // from oblique views. Once per scene, before any query. The occluders (an
+  // OccluderScene of the same device, kept alive by this scene) are instanced into this
+  // one as geometry id 1 (identity transform): recommitting this scene after
+  // UpdateVertices then refits or rebuilds only the surface, not the occluders. A ray
+  // stopped by them has hit.instID[0] == 1 (hit.geomID is 0, the geometry inside the
+  // instanced scene). No triangles: nothing is added.
+  void AddOccluders(std::shared_ptr<const OccluderScene> occluders);
   void AddOccluders(const std::vector<Eigen::Vector3d>& vertices,
                     const std::vector<Eigen::Vector3i>& triangles);
   bool HasOccluders() const { return occluder_ != nullptr; }
@@ -132,8 +157,7 @@ class TriangleScene {
   EmbreeDevice& device_;
   RTCScene scene_ = nullptr;
   RTCGeometry geometry_ = nullptr;
-  RTCScene occluder_scene_ = nullptr;
-  RTCGeometry occluder_mesh_ = nullptr;
+  std::shared_ptr<const OccluderScene> occluder_scene_;
   RTCGeometry occluder_ = nullptr;  // the instance of occluder_scene_
   float* vertex_buffer_ = nullptr;  // owned by Embree, 3 floats + 1 pad per vertex
   size_t num_vertices_ = 0;

@@ -40,7 +40,7 @@ SurfaceScene::UpdateKind SurfaceScene::Update(const Tessellation& tessellation,
   }
   auto scene = std::make_unique<TriangleScene>(device_, tessellation.points,
                                                tessellation.triangles, refittable_);
-  if (!occluder_triangles_.empty()) scene->AddOccluders(occluder_points_, occluder_triangles_);
+  if (occluders_) scene->AddOccluders(occluders_);
   scene_ = std::move(scene);
   triangles_ = tessellation.triangles;
   ++num_builds_;
@@ -48,12 +48,20 @@ SurfaceScene::UpdateKind SurfaceScene::Update(const Tessellation& tessellation,
 }
 
 void SurfaceScene::SetOccluders(const Tessellation& tessellation,
-                                std::vector<Eigen::Vector3d> points,
-                                std::vector<Eigen::Vector3i> triangles) {
-  occluder_points_ = std::move(points);
-  occluder_triangles_ = std::move(triangles);
+                                std::shared_ptr<const OccluderScene> occluders) {
+  const bool replacing = scene_->HasOccluders();
+  occluders_ = std::move(occluders);
+  if (!replacing) {
+    scene_->AddOccluders(occluders_);
+    return;
+  }
   triangles_.clear();  // forces Update() to rebuild, which adds the occluders
   Update(tessellation);
+}
+
+void SurfaceScene::SetOccluders(const Tessellation& tessellation, const std::vector<Eigen::Vector3d>& points,
+                                const std::vector<Eigen::Vector3i>& triangles) {
+  SetOccluders(tessellation, std::make_shared<const OccluderScene>(device_, points, triangles));
 }
 
 }  // namespace facets

@@ -30,9 +30,12 @@ class SurfaceScene {
 
   // Triangles that hide parts of this surface without belonging to it (the surface
   // around a window); kept across rebuilds. Rays that hit them first are kOccluded.
-  // Rebuilds the scene from `tessellation` (the surface's current state).
-  void SetOccluders(const Tessellation& tessellation, std::vector<Eigen::Vector3d> points,
-                    std::vector<Eigen::Vector3i> triangles);
+  // The first occluders are instanced into the scene as it stands; replacing earlier
+  // ones rebuilds the scene from `tessellation` (the surface's current state). The
+  // occluders must belong to this scene's device.
+  void SetOccluders(const Tessellation& tessellation, std::shared_ptr<const OccluderScene> occluders);
+  void SetOccluders(const Tessellation& tessellation, const std::vector<Eigen::Vector3d>& points,
+                    const std::vector<Eigen::Vector3i>& triangles);
 
   enum class UpdateKind { kMovedVertices, kRebuilt };
   // Moves the vertices in place when the topology is unchanged, rebuilds otherwise.
@@ -58,8 +61,7 @@ class SurfaceScene {
   std::vector<Eigen::Vector3i> triangles_;  // topology of the current scene
   std::unique_ptr<TriangleScene> scene_;
   bool refittable_ = true;
-  std::vector<Eigen::Vector3d> occluder_points_;
-  std::vector<Eigen::Vector3i> occluder_triangles_;
+  std::shared_ptr<const OccluderScene> occluders_;
   int num_builds_ = 0;
 };
 

@@ -6,10 +6,12 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <stdexcept>
 
 #include "mesh/creases.h"
+#include "visibility/embree_scene.h"
 #include "visibility/image_selection.h"
 #include "visibility/occluder_selection.h"
 
@@ -42,14 +44,13 @@ Eigen::AlignedBox3d GrownBox(const TinMesh& mesh) {
 WindowReport RunWithCreasePass(TinMesh* mesh, const std::vector<LevelImage>& images,
                                const AdjustmentOptions& options, const std::vector<bool>& fixed,
                                const std::vector<bool>& judged,
-                               const std::vector<Eigen::Vector3d>& occluder_points,
-                               const std::vector<Eigen::Vector3i>& occluders,
+                               const std::shared_ptr<const OccluderScene>& occluders,
                                bool second_pass, WindowResult* result) {
   auto run = [&]() {
     auto adjustment = std::make_unique<WindowAdjustment>(mesh, images, options);
     adjustment->SetFixedVertices(fixed);
     adjustment->SetBreakOffVertices(judged);
-    if (!occluders.empty()) adjustment->SetOccluders(occluder_points, occluders);
+    if (occluders) adjustment->SetOccluders(occluders);
     WindowReport report = adjustment->Run();
     result->triangles = adjustment->tessellation().triangles;
     result->grey = adjustment->grey();
@@ -155,8 +156,7 @@ struct LevelRun {
 // Runs the adjustment of one window of a sweep into result->report (result->error when
 // it fails).
 void RunWindow(const LevelRun& run, const std::vector<LevelImage>& seeing, int sweep,
-               const std::vector<Eigen::Vector3d>& occluder_points,
-               const std::vector<Eigen::Vector3i>& occluders, WindowMesh* wm, WindowResult* result) {
+               const std::shared_ptr<const OccluderScene>& occluders, WindowMesh* wm, WindowResult* result) {
   try {
     if (seeing.empty()) throw std::runtime_error("no image sees the window");
     const std::vector<bool> fixed =
@@ -170,8 +170,8 @@ void RunWindow(const LevelRun& run, const std::vector<LevelImage>& seeing, int s
       sweep_options.compute_precision = false;
       sweep_options.residual_correlation = false;
     }
-    result->report = RunWithCreasePass(&wm->mesh, seeing, sweep_options, fixed, judged, occluder_points,
-                                       occluders, run.options.crease_second_pass, result);
+    result->report = RunWithCreasePass(&wm->mesh, seeing, sweep_options, fixed, judged, occluders,
+                                       run.options.crease_second_pass, result);
     result->observed = true;
   } catch (const std::runtime_error& e) {
     result->error = e.what();
@@ -209,12 +209,19 @@ void AdjustWindow(const LevelRun& run, int w, int sweep, const Tessellation& sna
   ImageStorage storage;  // the window's image regions, freed with the window
   const Eigen::AlignedBox3d grown = GrownBox(wm.mesh);
   const std::vector<LevelImage> seeing = run.images(grown, &storage);
-  std::vector<Eigen::Vector3d> occluder_points;
-  std::vector<Eigen::Vector3i> occluders;
+  // The occluders' Embree scene, built once for the window's runs (a second run when the
+  // first sharpened new creases).
+  std::shared_ptr<const OccluderScene> occluders;
   if (run.many && run.options.occluders) {
-    CollectOccluders(*mesh, run.windows[w], snapshot, face_boxes, grown, seeing, &occluder_points, &occluders);
+    std::vector<Eigen::Vector3d> occluder_points;
+    std::vector<Eigen::Vector3i> occluder_triangles;
+    CollectOccluders(*mesh, run.windows[w], snapshot, face_boxes, grown, seeing, &occluder_points,
+                     &occluder_triangles);
+    if (!occluder_triangles.empty()) {
+      occluders = std::make_shared<const OccluderScene>(EmbreeDevice::Shared(), occluder_points, occluder_triangles);
+    }
   }
-  RunWindow(run, seeing, sweep, occluder_points, occluders, &wm, &result);
+  RunWindow(run, seeing, sweep, occluders, &wm, &result);
   // Only the core's vertices go back into the level's mesh.
   for (int local : wm.owned_local) {
     const auto lh = wm.mesh.vertex_handle(local);

@@ -92,10 +92,8 @@ void WindowAdjustment::SetGreyValues(std::vector<double> grey) {
   grey_given_ = true;
 }
 
-void WindowAdjustment::SetOccluders(std::vector<Eigen::Vector3d> points,
-                                    std::vector<Eigen::Vector3i> triangles) {
-  occluder_points_ = std::move(points);
-  occluder_triangles_ = std::move(triangles);
+void WindowAdjustment::SetOccluders(std::shared_ptr<const OccluderScene> occluders) {
+  occluders_ = std::move(occluders);
 }
 
 Eigen::Vector3d WindowAdjustment::Direction(int v) const {
@@ -280,7 +278,7 @@ void WindowAdjustment::PrepareRun(WindowReport* report) {
     for (auto vh : mesh_->vertices()) crease_vertex_[vh.idx()] = corners.vertex_sectors[vh.idx()] > 1;
   }
   scene_ = std::make_unique<SurfaceScene>(tess_);
-  if (!occluder_triangles_.empty()) scene_->SetOccluders(tess_, occluder_points_, occluder_triangles_);
+  if (occluders_) scene_->SetOccluders(tess_, occluders_);
   BuildTopologyTables();
   BuildPattern();
   fold_crossings_ = {};  // the mesh may have changed since the last run

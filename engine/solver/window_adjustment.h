@@ -26,6 +26,7 @@
 #include "mesh/surface_validity.h"
 #include "mesh/tessellation.h"
 #include "mesh/tin.h"
+#include "visibility/embree_scene.h"
 #include "visibility/pixel_cast.h"
 #include "visibility/silhouette.h"
 
@@ -133,8 +134,9 @@ class WindowAdjustment {
 
   // The surface around the window (e.g. the rest of the level's tessellated TIN): it
   // is no part of the window's unknowns, but a pixel whose ray hits it first sees
-  // something else and is no observation of the window.
-  void SetOccluders(std::vector<Eigen::Vector3d> points, std::vector<Eigen::Vector3i> triangles);
+  // something else and is no observation of the window. Built once, it can serve
+  // several runs of the window (of the shared Embree device, EmbreeDevice::Shared()).
+  void SetOccluders(std::shared_ptr<const OccluderScene> occluders);
 
   WindowReport Run();
 
@@ -240,8 +242,7 @@ class WindowAdjustment {
   std::vector<std::vector<std::array<double, 2>>> radiometry_;  // [image][channel]
   std::vector<bool> fixed_;
   std::vector<bool> judged_;
-  std::vector<Eigen::Vector3d> occluder_points_;
-  std::vector<Eigen::Vector3i> occluder_triangles_;
+  std::shared_ptr<const OccluderScene> occluders_;
   std::vector<bool> crease_edges_;  // by edge, fixed for one Run
   std::vector<bool> crease_vertex_;  // vertices where creases separate face sectors
   std::vector<int> vertex_views_;    // VertexViews of the current iteration
