@@ -6,6 +6,7 @@
 #include <cmath>
 #include <iostream>
 #include <limits>
+#include <memory>
 #include <random>
 #include <set>
 
@@ -337,6 +338,43 @@ TEST(CastPixels, OccludersHideLikeTheWholeSurface) {
   EXPECT_GT(on_wall, 5000);
   EXPECT_EQ(b.stats.occluded, on_wall - mismatched);
   EXPECT_LE(mismatched, 10);  // ties on the wall's foot line may go either way
+}
+
+// One occluder scene instanced by two surface scenes (a window's runs) casts every pixel
+// as occluders built for the scene alone do.
+TEST(CastPixels, SharedOccluderSceneCastsLikeItsOwn) {
+  const Eigen::Vector3d wall_min(-6, -0.25, 0), wall_max(6, 0.25, 4);
+  FlatMesh ground, wall;
+  AppendGridForTesting(-10, -10, 10, 10, 20, 20, [](double, double) { return 0.0; }, &ground);
+  AppendBoxForTesting(wall_min, wall_max, /*with_bottom=*/false, &wall);
+  const Tessellation ground_tess = TessellateFlatForTesting(ground);
+  const Tessellation wall_tess = TessellateFlatForTesting(wall);
+  SurfaceScene own(ground_tess);
+  own.SetOccluders(ground_tess, wall_tess.points, wall_tess.triangles);
+  const auto shared = std::make_shared<const OccluderScene>(EmbreeDevice::Shared(), wall_tess.points,
+                                                            wall_tess.triangles);
+  SurfaceScene first(ground_tess), second(ground_tess);
+  first.SetOccluders(ground_tess, shared);
+  second.SetOccluders(ground_tess, shared);
+  EXPECT_EQ(first.NumBuilds(), 1);  // the surface's BVH is not built again
+  const Camera camera = PinholeCamera(320, 240, 250);
+  const Rigid3d pose = LookAt({0, -18, 6}, {0, 4, 0});
+  CastOptions options;
+  options.keep_invalid = true;
+  const CastResult a = CastPixels(own, camera, pose, PixelRect::Full(camera), options);
+  EXPECT_GT(a.stats.occluded, 5000);
+  for (const SurfaceScene* scene : {&first, &second}) {
+    const CastResult b = CastPixels(*scene, camera, pose, PixelRect::Full(camera), options);
+    ASSERT_EQ(a.observations.size(), b.observations.size());
+    long long differ = 0;
+    for (size_t i = 0; i < a.observations.size(); ++i) {
+      const PixelObservation& pa = a.observations[i];
+      const PixelObservation& pb = b.observations[i];
+      differ += pa.status != pb.status || pa.face != pb.face || pa.u != pb.u || pa.v != pb.v;
+    }
+    EXPECT_EQ(differ, 0);
+    EXPECT_EQ(b.stats.occluded, a.stats.occluded);
+  }
 }
 
 // Rays honour lens distortion: the hit point, rebuilt from face barycentrics,
