@@ -211,13 +211,6 @@ OccluderScene::~OccluderScene() {
   rtcReleaseScene(scene_);
 }
 
-void TriangleScene::AddOccluders(const std::vector<Eigen::Vector3d>& vertices,
-                                 const std::vector<Eigen::Vector3i>& triangles) {
-  if (occluder_ != nullptr) throw std::logic_error("TriangleScene: occluders already added");
-  if (triangles.empty()) return;
-  AddOccluders(std::make_shared<const OccluderScene>(device_, vertices, triangles));
-}
-
 void TriangleScene::AddOccluders(std::shared_ptr<const OccluderScene> occluders) {
   if (occluder_ != nullptr) throw std::logic_error("TriangleScene: occluders already added");
   if (!occluders || occluders->NumTriangles() == 0) return;

@@ -137,8 +137,6 @@ class TriangleScene {
   // stopped by them has hit.instID[0] == 1 (hit.geomID is 0, the geometry inside the
   // instanced scene). No triangles: nothing is added.
   void AddOccluders(std::shared_ptr<const OccluderScene> occluders);
-  void AddOccluders(const std::vector<Eigen::Vector3d>& vertices,
-                    const std::vector<Eigen::Vector3i>& triangles);
   bool HasOccluders() const { return occluder_ != nullptr; }
 
   size_t NumVertices() const { return num_vertices_; }
