@@ -211,21 +211,27 @@ OccluderScene::~OccluderScene() {
   rtcReleaseScene(scene_);
 }
 
-void TriangleScene::AddOccluders(std::shared_ptr<const OccluderScene> occluders) {
-  if (occluder_ != nullptr) throw std::logic_error("TriangleScene: occluders already added");
-  if (!occluders || occluders->NumTriangles() == 0) return;
-  if (&occluders->device() != &device_) {
+void TriangleScene::SetOccluders(std::shared_ptr<const OccluderScene> occluders) {
+  if (occluders && &occluders->device() != &device_) {
     throw std::invalid_argument("TriangleScene: the occluders belong to another Embree device");
   }
-  occluder_scene_ = std::move(occluders);
-  occluder_ = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_INSTANCE);
-  rtcSetGeometryInstancedScene(occluder_, occluder_scene_->get());
-  rtcSetGeometryTimeStepCount(occluder_, 1);
-  const float identity[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};  // 3x4 column-major
-  rtcSetGeometryTransform(occluder_, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, identity);
-  rtcCommitGeometry(occluder_);
-  if (rtcAttachGeometry(scene_, occluder_) != 1) {
-    throw std::logic_error("TriangleScene: occluders did not get geometry id 1");
+  const bool none = !occluders || occluders->NumTriangles() == 0;
+  if (occluder_ == nullptr && none) return;
+  if (occluder_ != nullptr) {
+    rtcDetachGeometry(scene_, 1);
+    rtcReleaseGeometry(occluder_);
+    occluder_ = nullptr;
+    occluder_scene_.reset();
+  }
+  if (!none) {
+    occluder_scene_ = std::move(occluders);
+    occluder_ = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(occluder_, occluder_scene_->get());
+    rtcSetGeometryTimeStepCount(occluder_, 1);
+    const float identity[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};  // 3x4 column-major
+    rtcSetGeometryTransform(occluder_, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, identity);
+    rtcCommitGeometry(occluder_);
+    rtcAttachGeometryByID(scene_, occluder_, 1);
   }
   rtcCommitScene(scene_);
   device_.Check();

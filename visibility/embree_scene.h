@@ -79,7 +79,7 @@ inline void IntersectCoherent16(const int* valid, RTCScene scene, RTCRayHit16* p
 // (u, v) are Embree's barycentrics: point = (1-u-v) V0 + u V1 + v V2.
 struct RayHit {
   bool hit = false;
-  unsigned geom_id = 0;  // 0: the scene's own triangles, 1: occluders (AddOccluders; their instance id)
+  unsigned geom_id = 0;  // 0: the scene's own triangles, 1: occluders (SetOccluders; their instance id)
   unsigned prim_id = 0;
   float u = 0, v = 0;
   float distance = 0;           // ray parameter t (the direction is not normalised)
@@ -88,7 +88,7 @@ struct RayHit {
 
 // A static triangle set that stops rays but is not part of a surface (the rest of the
 // surface around a window), in its own Embree scene whose BVH is built once. Scenes
-// instance it (TriangleScene::AddOccluders), so one build serves every scene of the
+// instance it (TriangleScene::SetOccluders), so one build serves every scene of the
 // same device that shares it: a window's runs with the same surroundings.
 class OccluderScene {
  public:
@@ -128,15 +128,16 @@ class TriangleScene {
   // one window); rebuild after large moves.
   void UpdateVertices(const std::vector<Eigen::Vector3d>& vertices, bool refit = false);
 
-  // Adds a second, static triangle set that stops rays but is not part of the
-  // surface: the rest of the surface around a window, which hides parts of the window
-  // from oblique views. Once per scene, before any query. The occluders (an
-  // OccluderScene of the same device, kept alive by this scene) are instanced into this
-  // one as geometry id 1 (identity transform): recommitting this scene after
-  // UpdateVertices then refits or rebuilds only the surface, not the occluders. A ray
-  // stopped by them has hit.instID[0] == 1 (hit.geomID is 0, the geometry inside the
-  // instanced scene). No triangles: nothing is added.
-  void AddOccluders(std::shared_ptr<const OccluderScene> occluders);
+  // Sets a second, static triangle set that stops rays but is not part of the surface:
+  // the rest of the surface around a window, which hides parts of the window from
+  // oblique views. Replaces the occluders set before (a window whose surface left the
+  // region they were selected for). The occluders (an OccluderScene of the same
+  // device, kept alive by this scene) are instanced into this one as geometry id 1
+  // (identity transform): recommitting this scene after UpdateVertices then refits or
+  // rebuilds only the surface, not the occluders. A ray stopped by them has
+  // hit.instID[0] == 1 (hit.geomID is 0, the geometry inside the instanced scene). No
+  // triangles: no occluders.
+  void SetOccluders(std::shared_ptr<const OccluderScene> occluders);
   bool HasOccluders() const { return occluder_ != nullptr; }
 
   size_t NumVertices() const { return num_vertices_; }

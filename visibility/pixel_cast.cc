@@ -72,7 +72,7 @@ int CastPacket(RTCScene scene, const PixelRays& rays, const int* xs, const int* 
       if (options.keep_invalid) out[written++] = obs;
       continue;
     }
-    // Occluders are an instance (TriangleScene::AddOccluders): hit.instID set.
+    // Occluders are an instance (TriangleScene::SetOccluders): hit.instID set.
     if (packet.hit.instID[0][i] != RTC_INVALID_GEOMETRY_ID || packet.hit.geomID[i] != 0) {
       obs.status = RayStatus::kOccluded;
       ++stats->occluded;

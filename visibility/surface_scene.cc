@@ -40,28 +40,21 @@ SurfaceScene::UpdateKind SurfaceScene::Update(const Tessellation& tessellation,
   }
   auto scene = std::make_unique<TriangleScene>(device_, tessellation.points,
                                                tessellation.triangles, refittable_);
-  if (occluders_) scene->AddOccluders(occluders_);
+  if (occluders_) scene->SetOccluders(occluders_);
   scene_ = std::move(scene);
   triangles_ = tessellation.triangles;
   ++num_builds_;
   return UpdateKind::kRebuilt;
 }
 
-void SurfaceScene::SetOccluders(const Tessellation& tessellation,
-                                std::shared_ptr<const OccluderScene> occluders) {
-  const bool replacing = scene_->HasOccluders();
+void SurfaceScene::SetOccluders(std::shared_ptr<const OccluderScene> occluders) {
   occluders_ = std::move(occluders);
-  if (!replacing) {
-    scene_->AddOccluders(occluders_);
-    return;
-  }
-  triangles_.clear();  // forces Update() to rebuild, which adds the occluders
-  Update(tessellation);
+  scene_->SetOccluders(occluders_);
 }
 
-void SurfaceScene::SetOccluders(const Tessellation& tessellation, const std::vector<Eigen::Vector3d>& points,
+void SurfaceScene::SetOccluders(const std::vector<Eigen::Vector3d>& points,
                                 const std::vector<Eigen::Vector3i>& triangles) {
-  SetOccluders(tessellation, std::make_shared<const OccluderScene>(device_, points, triangles));
+  SetOccluders(std::make_shared<const OccluderScene>(device_, points, triangles));
 }
 
 }  // namespace facets

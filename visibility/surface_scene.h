@@ -30,12 +30,10 @@ class SurfaceScene {
 
   // Triangles that hide parts of this surface without belonging to it (the surface
   // around a window); kept across rebuilds. Rays that hit them first are kOccluded.
-  // The first occluders are instanced into the scene as it stands; replacing earlier
-  // ones rebuilds the scene from `tessellation` (the surface's current state). The
-  // occluders must belong to this scene's device.
-  void SetOccluders(const Tessellation& tessellation, std::shared_ptr<const OccluderScene> occluders);
-  void SetOccluders(const Tessellation& tessellation, const std::vector<Eigen::Vector3d>& points,
-                    const std::vector<Eigen::Vector3i>& triangles);
+  // They are instanced into the scene as it stands (replacing earlier ones) without
+  // rebuilding the surface's BVH. The occluders must belong to this scene's device.
+  void SetOccluders(std::shared_ptr<const OccluderScene> occluders);
+  void SetOccluders(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3i>& triangles);
 
   enum class UpdateKind { kMovedVertices, kRebuilt };
   // Moves the vertices in place when the topology is unchanged, rebuilds otherwise.

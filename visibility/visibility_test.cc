@@ -311,7 +311,7 @@ TEST(CastPixels, OccludersHideLikeTheWholeSurface) {
   const Tessellation wall_tess = TessellateFlatForTesting(wall);
   const SurfaceScene whole_scene(whole_tess);
   SurfaceScene window_scene(ground_tess);
-  window_scene.SetOccluders(ground_tess, wall_tess.points, wall_tess.triangles);
+  window_scene.SetOccluders(wall_tess.points, wall_tess.triangles);
   const Camera camera = PinholeCamera(320, 240, 250);
   const Rigid3d pose = LookAt({0, -18, 6}, {0, 4, 0});
   CastOptions options;
@@ -340,8 +340,20 @@ TEST(CastPixels, OccludersHideLikeTheWholeSurface) {
   EXPECT_LE(mismatched, 10);  // ties on the wall's foot line may go either way
 }
 
+// Pixels whose status, face or facet barycentrics differ between two casts of the same
+// pixels (in the same order).
+long long PixelsThatDiffer(const CastResult& a, const CastResult& b) {
+  long long differ = 0;
+  for (size_t i = 0; i < a.observations.size() && i < b.observations.size(); ++i) {
+    const PixelObservation& pa = a.observations[i];
+    const PixelObservation& pb = b.observations[i];
+    differ += pa.status != pb.status || pa.face != pb.face || pa.u != pb.u || pa.v != pb.v;
+  }
+  return differ;
+}
+
 // One occluder scene instanced by two surface scenes (a window's runs) casts every pixel
-// as occluders built for the scene alone do.
+// as occluders built for the scene alone do; occluders can be replaced.
 TEST(CastPixels, SharedOccluderSceneCastsLikeItsOwn) {
   const Eigen::Vector3d wall_min(-6, -0.25, 0), wall_max(6, 0.25, 4);
   FlatMesh ground, wall;
@@ -350,12 +362,12 @@ TEST(CastPixels, SharedOccluderSceneCastsLikeItsOwn) {
   const Tessellation ground_tess = TessellateFlatForTesting(ground);
   const Tessellation wall_tess = TessellateFlatForTesting(wall);
   SurfaceScene own(ground_tess);
-  own.SetOccluders(ground_tess, wall_tess.points, wall_tess.triangles);
+  own.SetOccluders(wall_tess.points, wall_tess.triangles);
   const auto shared = std::make_shared<const OccluderScene>(EmbreeDevice::Shared(), wall_tess.points,
                                                             wall_tess.triangles);
   SurfaceScene first(ground_tess), second(ground_tess);
-  first.SetOccluders(ground_tess, shared);
-  second.SetOccluders(ground_tess, shared);
+  first.SetOccluders(shared);
+  second.SetOccluders(shared);
   EXPECT_EQ(first.NumBuilds(), 1);  // the surface's BVH is not built again
   const Camera camera = PinholeCamera(320, 240, 250);
   const Rigid3d pose = LookAt({0, -18, 6}, {0, 4, 0});
@@ -366,15 +378,22 @@ TEST(CastPixels, SharedOccluderSceneCastsLikeItsOwn) {
   for (const SurfaceScene* scene : {&first, &second}) {
     const CastResult b = CastPixels(*scene, camera, pose, PixelRect::Full(camera), options);
     ASSERT_EQ(a.observations.size(), b.observations.size());
-    long long differ = 0;
-    for (size_t i = 0; i < a.observations.size(); ++i) {
-      const PixelObservation& pa = a.observations[i];
-      const PixelObservation& pb = b.observations[i];
-      differ += pa.status != pb.status || pa.face != pb.face || pa.u != pb.u || pa.v != pb.v;
-    }
-    EXPECT_EQ(differ, 0);
+    EXPECT_EQ(PixelsThatDiffer(a, b), 0);
     EXPECT_EQ(b.stats.occluded, a.stats.occluded);
   }
+  // Replaced (a window that moved out of the region its occluders were selected for): a
+  // wall behind the ground hides less, none hides nothing, the wall again casts as before,
+  // and the surface's BVH is never rebuilt.
+  FlatMesh far_wall;
+  AppendBoxForTesting({-6, 20, 0}, {6, 21, 4}, /*with_bottom=*/false, &far_wall);
+  const Tessellation far_tess = TessellateFlatForTesting(far_wall);
+  first.SetOccluders(far_tess.points, far_tess.triangles);
+  EXPECT_LT(CastPixels(first, camera, pose, PixelRect::Full(camera), options).stats.occluded, a.stats.occluded);
+  first.SetOccluders(nullptr);
+  EXPECT_EQ(CastPixels(first, camera, pose, PixelRect::Full(camera), options).stats.occluded, 0);
+  first.SetOccluders(shared);
+  EXPECT_EQ(PixelsThatDiffer(a, CastPixels(first, camera, pose, PixelRect::Full(camera), options)), 0);
+  EXPECT_EQ(first.NumBuilds(), 1);
 }
 
 // Rays honour lens distortion: the hit point, rebuilt from face barycentrics,

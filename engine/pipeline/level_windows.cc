@@ -13,7 +13,8 @@
 #include "mesh/creases.h"
 #include "visibility/embree_scene.h"
 #include "visibility/image_selection.h"
-#include "visibility/occluder_selection.h"
+
+#include "engine/pipeline/window_occluders.h"
 
 namespace facets {
 namespace {
@@ -28,12 +29,27 @@ struct WindowResult {
   int channels = 1;
 };
 
-// The window's surface grown by a quarter of its size: the surface moves during the
-// adjustment, and the images (regions) must cover where it goes.
-Eigen::AlignedBox3d GrownBox(const TinMesh& mesh) {
+Eigen::AlignedBox3d VertexBox(const TinMesh& mesh) {
   Eigen::AlignedBox3d box;
   for (auto vh : mesh.vertices()) box.extend(ToEigen(mesh.point(vh)));
-  const Eigen::Vector3d grow = Eigen::Vector3d::Constant(0.25 * box.diagonal().norm());
+  return box;
+}
+
+// How far a window's surface may move in its run (object units): a quarter of its box's
+// diagonal.
+double GrowthOf(const TinMesh& mesh) { return 0.25 * VertexBox(mesh).diagonal().norm(); }
+
+// How far a window's faces may move before its occluders are selected again (object
+// units): a twentieth of its box's diagonal. At level 1 of block_oblique one window run
+// in ten selects again; a wider slack selects more occluders for every run, a narrower
+// one selects more often (docs/BENCHMARKS.md "Occluders selected by depth").
+double OccluderSlack(const TinMesh& mesh) { return 0.05 * VertexBox(mesh).diagonal().norm(); }
+
+// The window's surface grown by GrowthOf: the surface moves during the adjustment, and
+// the images (regions) must cover where it goes.
+Eigen::AlignedBox3d GrownBox(const TinMesh& mesh) {
+  Eigen::AlignedBox3d box = VertexBox(mesh);
+  const Eigen::Vector3d grow = Eigen::Vector3d::Constant(GrowthOf(mesh));
   box.extend(box.min() - grow);
   box.extend(box.max() + grow);
   return box;
@@ -44,13 +60,15 @@ Eigen::AlignedBox3d GrownBox(const TinMesh& mesh) {
 WindowReport RunWithCreasePass(TinMesh* mesh, const std::vector<LevelImage>& images,
                                const AdjustmentOptions& options, const std::vector<bool>& fixed,
                                const std::vector<bool>& judged,
-                               const std::shared_ptr<const OccluderScene>& occluders,
-                               bool second_pass, WindowResult* result) {
+                               WindowOccluders* occluders, bool second_pass, WindowResult* result) {
   auto run = [&]() {
     auto adjustment = std::make_unique<WindowAdjustment>(mesh, images, options);
     adjustment->SetFixedVertices(fixed);
     adjustment->SetBreakOffVertices(judged);
-    if (occluders) adjustment->SetOccluders(occluders);
+    if (occluders) {
+      adjustment->SetOccluderSource(
+          [occluders](const std::vector<Eigen::AlignedBox3d>& boxes) { return occluders->For(boxes); });
+    }
     WindowReport report = adjustment->Run();
     result->triangles = adjustment->tessellation().triangles;
     result->grey = adjustment->grey();
@@ -92,34 +110,6 @@ Tessellation TessellateWithCreases(const TinMesh& mesh, const AdjustmentOptions&
   return Tessellate(mesh, BuildPatches(mesh, corners), corners);
 }
 
-// Occluders of a window: only the faces outside it that can stand between one of its
-// images and the (grown) window, as their own points.
-void CollectOccluders(const TinMesh& mesh, const MeshWindow& window, const Tessellation& snapshot,
-                      const std::vector<Eigen::AlignedBox3d>& face_boxes, const Eigen::AlignedBox3d& grown,
-                      const std::vector<LevelImage>& seeing, std::vector<Eigen::Vector3d>* occluder_points,
-                      std::vector<Eigen::Vector3i>* occluders) {
-  std::vector<OccluderView> views;
-  for (const LevelImage& image : seeing) views.push_back({image.camera, image.cam_from_world});
-  std::vector<char> in_window(mesh.n_faces(), 0);
-  for (int f : window.faces) in_window[f] = 1;
-  std::vector<int> point_index(snapshot.points.size(), -1);
-  for (int f : FacesThatCanHide(face_boxes, grown, views)) {
-    if (in_window[f]) continue;
-    for (int s = f * kSubTrianglesPerFace; s < (f + 1) * kSubTrianglesPerFace; ++s) {
-      Eigen::Vector3i tri;
-      for (int c = 0; c < 3; ++c) {
-        int& index = point_index[snapshot.triangles[s][c]];
-        if (index < 0) {
-          index = static_cast<int>(occluder_points->size());
-          occluder_points->push_back(snapshot.points[snapshot.triangles[s][c]]);
-        }
-        tri[c] = index;
-      }
-      occluders->push_back(tri);
-    }
-  }
-}
-
 // The per-vertex results of a window's last sweep re-indexed to its owned vertices
 // (MeshWindow order); a window without observations gives sigma 0, no views.
 void KeepOwnedVertexResults(const WindowMesh& wm, WindowResult* result) {
@@ -155,8 +145,8 @@ struct LevelRun {
 
 // Runs the adjustment of one window of a sweep into result->report (result->error when
 // it fails).
-void RunWindow(const LevelRun& run, const std::vector<LevelImage>& seeing, int sweep,
-               const std::shared_ptr<const OccluderScene>& occluders, WindowMesh* wm, WindowResult* result) {
+void RunWindow(const LevelRun& run, const std::vector<LevelImage>& seeing, int sweep, WindowOccluders* occluders,
+               WindowMesh* wm, WindowResult* result) {
   try {
     if (seeing.empty()) throw std::runtime_error("no image sees the window");
     const std::vector<bool> fixed =
@@ -197,10 +187,9 @@ std::string WindowLine(const LevelRun& run, int finished, int w, int sweep, cons
 }
 
 // One window of one sweep: extracted, adjusted, its core's vertices written back into
-// the level's mesh. `snapshot` and `face_boxes`: the surface before the window's group,
-// for the occluders.
-void AdjustWindow(const LevelRun& run, int w, int sweep, const Tessellation& snapshot,
-                  const std::vector<Eigen::AlignedBox3d>& face_boxes) {
+// the level's mesh. `snapshot` and `surface` (its face boxes): the surface before the
+// window's group, for the occluders.
+void AdjustWindow(const LevelRun& run, int w, int sweep, const Tessellation& snapshot, const FaceBoxIndex& surface) {
   TinMesh* mesh = run.mesh;
   WindowMesh wm = ExtractWindowMesh(*mesh, run.windows[w]);
   WindowResult& result = run.results[w];
@@ -209,19 +198,13 @@ void AdjustWindow(const LevelRun& run, int w, int sweep, const Tessellation& sna
   ImageStorage storage;  // the window's image regions, freed with the window
   const Eigen::AlignedBox3d grown = GrownBox(wm.mesh);
   const std::vector<LevelImage> seeing = run.images(grown, &storage);
-  // The occluders' Embree scene, built once for the window's runs (a second run when the
-  // first sharpened new creases).
-  std::shared_ptr<const OccluderScene> occluders;
+  // The occluders, selected for the window's surface within OccluderSlack of where it
+  // starts, for every run of the window (a second run when the first sharpened new creases).
+  std::unique_ptr<WindowOccluders> occluders;
   if (run.many && run.options.occluders) {
-    std::vector<Eigen::Vector3d> occluder_points;
-    std::vector<Eigen::Vector3i> occluder_triangles;
-    CollectOccluders(*mesh, run.windows[w], snapshot, face_boxes, grown, seeing, &occluder_points,
-                     &occluder_triangles);
-    if (!occluder_triangles.empty()) {
-      occluders = std::make_shared<const OccluderScene>(EmbreeDevice::Shared(), occluder_points, occluder_triangles);
-    }
+    occluders = std::make_unique<WindowOccluders>(run.windows[w], snapshot, surface, seeing, OccluderSlack(wm.mesh));
   }
-  RunWindow(run, seeing, sweep, occluders, &wm, &result);
+  RunWindow(run, seeing, sweep, occluders.get(), &wm, &result);
   // Only the core's vertices go back into the level's mesh.
   for (int local : wm.owned_local) {
     const auto lh = wm.mesh.vertex_handle(local);
@@ -448,13 +431,10 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
       // The surface as it stands before this group, for the occluders: the windows of a
       // group change disjoint parts and must not read each other's half-moved state.
       Tessellation snapshot;
-      std::vector<Eigen::AlignedBox3d> face_boxes;
-      if (many && options.occluders) {
-        snapshot = TessellateWithCreases(*mesh, adjustment);
-        face_boxes = FaceBoxes(snapshot);
-      }
+      if (many && options.occluders) snapshot = TessellateWithCreases(*mesh, adjustment);
+      const FaceBoxIndex surface(FaceBoxes(snapshot));
       tbb::parallel_for(size_t{0}, group.size(), [&](size_t g) {
-        AdjustWindow(run, group[g], sweep, snapshot, face_boxes);
+        AdjustWindow(run, group[g], sweep, snapshot, surface);
       });
     }
   }

@@ -170,6 +170,7 @@ json StartJson(const ReconstructionReport& report) {
 
 json WindowClocksJson(const WindowClocks& w) {
   return {{"runs", w.runs},           {"iterations", w.iterations}, {"prepare", w.prepare},
+          {"occluders", w.occluders},  {"occluder_scenes", w.occluder_scenes},
           {"cast", w.cast},           {"linearise", w.linearise},   {"solve", w.solve},
           {"update", w.update},       {"finish", w.finish}};
 }

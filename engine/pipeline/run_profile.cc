@@ -82,6 +82,7 @@ void RunProfile::AddToTotal(const ClockReading& more) {
 double RunProfile::CategoryCpu(const std::string& name) const {
   const WindowClocks windows = WindowTotals();
   if (name == "prepare") return windows.prepare;
+  if (name == "occluders") return windows.occluders;
   if (name == "cast") return windows.cast;
   if (name == "linearise") return windows.linearise;
   if (name == "solve") return windows.solve;
@@ -112,7 +113,7 @@ double RunProfile::StagesCpu() const {
 
 const std::vector<std::string>& RunProfile::Categories() {
   static const std::vector<std::string> names = {
-      "images",         "start",     "descent",   "prepare",           "cast",
+      "images",         "start",     "descent",   "prepare",           "occluders",         "cast",
       "linearise",      "solve",     "update",    "finish",            "normal search",
       "plane propagation", "trial re-adjustment", "crossing counts", "untangling", "products"};
   return names;
@@ -134,7 +135,8 @@ std::string RunProfile::Table() const {
       out += Format("        windows: %lld runs, ", w.runs) + Format("%lld iterations; ", w.iterations) +
              Format("cast %.1f, ", w.cast) + Format("linearise %.1f, ", w.linearise) +
              Format("solve %.1f, ", w.solve) + Format("update %.1f, ", w.update) +
-             Format("prepare %.1f, ", w.prepare) + Format("finish %.1f\n", w.finish);
+             Format("prepare %.1f, ", w.prepare) + Format("occluders %.1f ", w.occluders) +
+             Format("(%lld scenes), ", w.occluder_scenes) + Format("finish %.1f\n", w.finish);
     }
   }
   out += "  by category (CPU s, share):";

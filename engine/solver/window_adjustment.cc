@@ -11,6 +11,7 @@
 #include "engine/solver/window_adjustment_internal.h"
 #include "mesh/creases.h"
 #include "mesh/surface_validity.h"
+#include "visibility/occluder_selection.h"
 #include "visibility/surface_scene.h"
 
 namespace facets {
@@ -92,9 +93,7 @@ void WindowAdjustment::SetGreyValues(std::vector<double> grey) {
   grey_given_ = true;
 }
 
-void WindowAdjustment::SetOccluders(std::shared_ptr<const OccluderScene> occluders) {
-  occluders_ = std::move(occluders);
-}
+void WindowAdjustment::SetOccluderSource(OccluderSource source) { occluder_source_ = std::move(source); }
 
 Eigen::Vector3d WindowAdjustment::Direction(int v) const {
   if (options_.displacement == Displacement::kVertical) return Eigen::Vector3d::UnitZ();
@@ -278,7 +277,7 @@ void WindowAdjustment::PrepareRun(WindowReport* report) {
     for (auto vh : mesh_->vertices()) crease_vertex_[vh.idx()] = corners.vertex_sectors[vh.idx()] > 1;
   }
   scene_ = std::make_unique<SurfaceScene>(tess_);
-  if (occluders_) scene_->SetOccluders(tess_, occluders_);
+  occluders_.reset();  // asked for at the first cast
   BuildTopologyTables();
   BuildPattern();
   fold_crossings_ = {};  // the mesh may have changed since the last run
@@ -288,8 +287,11 @@ void WindowAdjustment::PrepareRun(WindowReport* report) {
 WindowAdjustment::Linearisation WindowAdjustment::LineariseIteration(
     int iteration, std::vector<std::vector<PixelObservation>>* casts, IterationReport* it) {
   double cpu = ThreadCpuSeconds();
+  const std::vector<Eigen::AlignedBox3d> face_boxes = FaceBoxes(tess_);
+  RefreshOccluders(face_boxes);
+  clocks_.occluders += ThreadCpuLap(&cpu);
   auto start = std::chrono::steady_clock::now();
-  it->observations = CastAll(casts, it);
+  it->observations = CastAll(face_boxes, casts, it);
   it->background = DropBackground(casts);
   it->observations -= it->background;
   it->seconds_cast = Seconds(start);

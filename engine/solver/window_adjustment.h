@@ -10,8 +10,10 @@
 // values and radiometry; until the break-off criterion holds.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -134,9 +136,13 @@ class WindowAdjustment {
 
   // The surface around the window (e.g. the rest of the level's tessellated TIN): it
   // is no part of the window's unknowns, but a pixel whose ray hits it first sees
-  // something else and is no observation of the window. Built once, it can serve
-  // several runs of the window (of the shared Embree device, EmbreeDevice::Shared()).
-  void SetOccluders(std::shared_ptr<const OccluderScene> occluders);
+  // something else and is no observation of the window. Asked before every cast with
+  // the bounding boxes of the window's faces as they stand (16 sub-triangles each, face
+  // order): the source returns the occluders for that surface, the same scene while it
+  // still serves (of the shared Embree device, EmbreeDevice::Shared()).
+  using OccluderSource =
+      std::function<std::shared_ptr<const OccluderScene>(const std::vector<Eigen::AlignedBox3d>& window_boxes)>;
+  void SetOccluderSource(OccluderSource source);
 
   WindowReport Run();
 
@@ -191,7 +197,10 @@ class WindowAdjustment {
   void BuildTopologyTables();
   void BuildPattern();
   // Returns the observations; *rays: how many pixel rays were cast.
-  long long CastAll(std::vector<std::vector<PixelObservation>>* casts, IterationReport* it);
+  // The occluders for the window's faces as they stand (OccluderSource).
+  void RefreshOccluders(const std::vector<Eigen::AlignedBox3d>& face_boxes);
+  long long CastAll(const std::vector<Eigen::AlignedBox3d>& face_boxes,
+                    std::vector<std::vector<PixelObservation>>* casts, IterationReport* it);
   void InitialiseGrey(const std::vector<std::vector<PixelObservation>>& casts);
   // Drops background pixels (AdjustmentOptions::background_below); returns how many.
   long long DropBackground(std::vector<std::vector<PixelObservation>>* casts) const;
@@ -242,7 +251,8 @@ class WindowAdjustment {
   std::vector<std::vector<std::array<double, 2>>> radiometry_;  // [image][channel]
   std::vector<bool> fixed_;
   std::vector<bool> judged_;
-  std::shared_ptr<const OccluderScene> occluders_;
+  OccluderSource occluder_source_;
+  std::shared_ptr<const OccluderScene> occluders_;  // attached to scene_
   std::vector<bool> crease_edges_;  // by edge, fixed for one Run
   std::vector<bool> crease_vertex_;  // vertices where creases separate face sectors
   std::vector<int> vertex_views_;    // VertexViews of the current iteration

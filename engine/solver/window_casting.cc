@@ -14,12 +14,21 @@
 
 namespace facets {
 
-long long WindowAdjustment::CastAll(std::vector<std::vector<PixelObservation>>* casts, IterationReport* it) {
+void WindowAdjustment::RefreshOccluders(const std::vector<Eigen::AlignedBox3d>& face_boxes) {
+  if (!occluder_source_) return;
+  std::shared_ptr<const OccluderScene> occluders = occluder_source_(face_boxes);
+  if (occluders == occluders_) return;
+  occluders_ = std::move(occluders);
+  scene_->SetOccluders(occluders_);
+  ++clocks_.occluder_scenes;
+}
+
+long long WindowAdjustment::CastAll(const std::vector<Eigen::AlignedBox3d>& face_boxes,
+                                    std::vector<std::vector<PixelObservation>>* casts, IterationReport* it) {
   Eigen::AlignedBox3d box;
   for (const auto& p : tess_.points) box.extend(p);
-  // Only the 8x8 pixel blocks onto which some face of the window projects: the rest of
-  // the window's rectangle sees the surroundings only.
-  const std::vector<Eigen::AlignedBox3d> face_boxes = FaceBoxes(tess_);
+  // Only the 8x8 pixel blocks onto which some face of the window projects (face_boxes:
+  // FaceBoxes(tess_)): the rest of the window's rectangle sees the surroundings only.
   CastOptions cast_options;
   cast_options.min_cos_incidence = options_.min_cos_incidence;
   casts->assign(images_.size(), {});

@@ -8,6 +8,8 @@ WindowClocks& WindowClocks::operator+=(const WindowClocks& o) {
   runs += o.runs;
   iterations += o.iterations;
   prepare += o.prepare;
+  occluders += o.occluders;
+  occluder_scenes += o.occluder_scenes;
   cast += o.cast;
   linearise += o.linearise;
   solve += o.solve;
@@ -21,6 +23,8 @@ WindowClocks WindowClocks::operator-(const WindowClocks& o) const {
   d.runs = runs - o.runs;
   d.iterations = iterations - o.iterations;
   d.prepare = prepare - o.prepare;
+  d.occluders = occluders - o.occluders;
+  d.occluder_scenes = occluder_scenes - o.occluder_scenes;
   d.cast = cast - o.cast;
   d.linearise = linearise - o.linearise;
   d.solve = solve - o.solve;

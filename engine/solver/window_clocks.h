@@ -14,13 +14,15 @@ struct WindowClocks {
   long long runs = 0;        // window runs (WindowAdjustment::Run)
   long long iterations = 0;  // their iterations
   double prepare = 0.0;      // creases, tessellation, Embree scene, normal-equation pattern (s)
+  double occluders = 0.0;    // the occluders' selection and Embree scene (s; its build threads not counted)
+  long long occluder_scenes = 0;  // occluder scenes attached (one per window run, more when the window moved far)
   double cast = 0.0;         // rays from the images' pixels onto the surface (s)
   double linearise = 0.0;    // observation equations accumulated into the normal equations (s)
   double solve = 0.0;        // LDL^T or PCG (s)
   double update = 0.0;       // vertices, normals, tessellation, Embree scene refit (s)
   double finish = 0.0;       // the window's report and precision (s)
 
-  double Sum() const { return prepare + cast + linearise + solve + update + finish; }
+  double Sum() const { return prepare + occluders + cast + linearise + solve + update + finish; }
   WindowClocks& operator+=(const WindowClocks& o);
   WindowClocks operator-(const WindowClocks& o) const;
 };
