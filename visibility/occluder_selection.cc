@@ -81,7 +81,9 @@ struct ViewDepthGrid {
     if (cut.isEmpty()) return false;
     const Eigen::Vector2d scale = Eigen::Vector2d::Constant(kCells).cwiseQuotient(rect.sizes());
     auto cell = [&](double v, double lo, double s) {
-      return std::clamp(static_cast<int>(std::floor((v - lo) * s)), 0, kCells - 1);
+      const double t = (v - lo) * s;  // NaN or out of range lands on the edge cells
+      if (!(t > 0.0)) return 0;
+      return t < kCells ? static_cast<int>(t) : kCells - 1;
     };
     *x0 = cell(cut.min().x(), rect.min().x(), scale.x());
     *x1 = cell(cut.max().x(), rect.min().x(), scale.x());
