@@ -10,11 +10,10 @@
 #include <mutex>
 #include <stdexcept>
 
+#include "engine/pipeline/window_occluders.h"
 #include "mesh/creases.h"
 #include "visibility/embree_scene.h"
 #include "visibility/image_selection.h"
-
-#include "engine/pipeline/window_occluders.h"
 
 namespace facets {
 namespace {
@@ -35,21 +34,17 @@ Eigen::AlignedBox3d VertexBox(const TinMesh& mesh) {
   return box;
 }
 
-// How far a window's surface may move in its run (object units): a quarter of its box's
-// diagonal.
-double GrowthOf(const TinMesh& mesh) { return 0.25 * VertexBox(mesh).diagonal().norm(); }
-
 // How far a window's faces may move before its occluders are selected again (object
 // units): a twentieth of its box's diagonal. At level 1 of block_oblique one window run
 // in ten selects again; a wider slack selects more occluders for every run, a narrower
 // one selects more often (docs/BENCHMARKS.md "Occluders selected by depth").
 double OccluderSlack(const TinMesh& mesh) { return 0.05 * VertexBox(mesh).diagonal().norm(); }
 
-// The window's surface grown by GrowthOf: the surface moves during the adjustment, and
-// the images (regions) must cover where it goes.
+// The window's surface grown by a quarter of its size: the surface moves during the
+// adjustment, and the images (regions) must cover where it goes.
 Eigen::AlignedBox3d GrownBox(const TinMesh& mesh) {
   Eigen::AlignedBox3d box = VertexBox(mesh);
-  const Eigen::Vector3d grow = Eigen::Vector3d::Constant(GrowthOf(mesh));
+  const Eigen::Vector3d grow = Eigen::Vector3d::Constant(0.25 * box.diagonal().norm());
   box.extend(box.min() - grow);
   box.extend(box.max() + grow);
   return box;
