@@ -295,6 +295,7 @@ TEST_F(NormalSearchGable, ReconstructPropagatesPlanesOnEveryFinerLevel) {
 // A V-cycle (ReconstructionOptions::v_cycles): after level 0 the pipeline goes back up
 // to level 1, its TIN put onto the level-0 surface, and down again; the report lists
 // the five passes, the projection moved the level-1 vertices, and the roof stays right.
+// Per-vertex sigma comes from the last pass alone: the first pass over level 0 skips it.
 TEST_F(NormalSearchGable, VCycleGoesBackUpToLevelOneAndDownAgain) {
   ReconstructionOptions options;
   options.break_off_gsd = 0.0;  // the break-off in metres of AdjustmentOptions
@@ -311,6 +312,11 @@ TEST_F(NormalSearchGable, VCycleGoesBackUpToLevelOneAndDownAgain) {
     EXPECT_EQ(r.report.levels[k].level, levels[k]);
     EXPECT_EQ(r.report.levels[k].cycle, cycles[k]);
   }
+  for (const WindowReport& w : r.report.levels[2].windows) EXPECT_FALSE(w.precision_computed);
+  int with_precision = 0;
+  for (const WindowReport& w : r.report.levels[4].windows) with_precision += w.precision_computed;
+  EXPECT_EQ(with_precision, static_cast<int>(r.report.levels[4].windows.size()));
+  EXPECT_GT(*std::max_element(r.vertex_sigma.begin(), r.vertex_sigma.end()), 0.0);
   const ProjectionReport& p = r.report.levels[3].projection;
   std::cout << "v-cycle: " << p.moved << " of " << r.report.levels[3].vertices << " level-1 vertices moved (median "
             << p.median_move << " m), " << p.missed << " without a hit\n";

@@ -120,6 +120,12 @@ void RunPass(const RunContext& run, LevelPass* pass, size_t index, size_t count,
              TinMesh* cycle_top_tin, Reconstruction* result) {
   const auto level_start = std::chrono::steady_clock::now();
   pass->adjustment = run.LevelOptions(pass->level, pass->cycle);
+  // Per-vertex sigma and the residuals' correlation reach the products from the last pass
+  // only, which adjusts every vertex again: the passes before it skip both.
+  if (!pass->last) {
+    pass->adjustment.compute_precision = false;
+    pass->adjustment.residual_correlation = false;
+  }
   LevelReport& r = pass->report;
   if (pass->cycle > 0 && pass->level == std::min(run.options.v_cycle_level, run.coarsest)) {
     const auto clock = pass->Clock(run, "back up");

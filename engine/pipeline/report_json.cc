@@ -17,6 +17,7 @@ json IterationJson(const IterationReport& it) {
           {"rays", it.rays},
           {"rect_pixels", it.rect_pixels},
           {"cg_iterations", it.cg_iterations},
+          {"step_scale", it.step_scale},
           {"sigma0", it.sigma0},
           {"robust_scale", it.robust_scale},
           {"rejected", it.rejected},

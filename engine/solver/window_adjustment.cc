@@ -244,6 +244,7 @@ WindowReport WindowAdjustment::Run() {
     report.redundancy = redundancy;
 
     const double scale = UpdateUnknowns(solution, &it);
+    it.step_scale = scale;
     report.cg_iterations_total += it.cg_iterations;
     report.iterations.push_back(it);
     report.sigma0 = it.sigma0;

@@ -66,6 +66,7 @@ struct IterationReport {
   double max_dn_border = 0.0;
   double max_dn_corner = 0.0;
   int fold_limited = 0;  // vertices whose step the fold guard limited
+  double step_scale = 1.0;  // factor the solution's steps were scaled by (AdjustmentOptions::max_step)
   double seconds_cast = 0.0;
   double seconds_linearise = 0.0;  // linearisation + accumulation into CSR
   double seconds_solve = 0.0;
