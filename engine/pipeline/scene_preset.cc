@@ -145,6 +145,10 @@ void ApplyScenePreset(ScenePreset preset, ReconstructionOptions* options) {
       // walls and eaves the level cannot represent; the seed scenes' windows keep the
       // library's 4 (one step may grow once before they converge).
       options->adjustment.stall_iterations = 2;
+      // One face ring around a window's core (a core vertex's whole 1-ring): every window
+      // run of the aerial path casts and linearises about a fifth fewer pixels than with
+      // two rings, for the same walls (docs/EXPERIMENTS.md "One margin ring").
+      options->windows.partition.margin_rings = 1;
       break;
     case ScenePreset::kFacade:
       options->start_plane = ReconstructionOptions::StartPlane::kFitted;

@@ -30,10 +30,12 @@ TEST(ScenePreset, AerialSetsTheWallBundleOverTheDefaults) {
   EXPECT_EQ(options.facet_pixels, 1.5);
   EXPECT_EQ(options.v_cycles, 1);
   EXPECT_TRUE(options.wall_corners && options.wall_feet && options.wall_eaves);
+  EXPECT_EQ(options.windows.partition.margin_rings, 1);
   ReconstructionOptions untouched;
   ApplyScenePreset(ScenePreset::kAuto, &untouched);
   EXPECT_EQ(untouched.levels, ReconstructionOptions().levels);
   EXPECT_FALSE(untouched.wall_corners);
+  EXPECT_EQ(untouched.windows.partition.margin_rings, 2);
 }
 
 // The seed's nadir stereo pair: both images look straight down with the same heading, so
