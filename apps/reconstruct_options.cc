@@ -172,7 +172,9 @@ std::string SettingsFile(const CLI::App& sub) {
     CLI::Option* bound = const_cast<CLI::Option*>(option);  // capture_default_str only reads the field
     const std::string value = bound->capture_default_str()->get_default_str();
     if (value.empty()) continue;
-    const bool list = value.front() == '[';
+    // A list option's value is CLI11's "[a,b,...]"; a single value that starts with '['
+    // (a path, say) is quoted like any other, or it would read back as a list.
+    const bool list = option->get_items_expected_max() > 1 && value.front() == '[';
     file << option->get_single_name() << "=" << (list ? value : CLI::detail::convert_arg_for_ini(value)) << "\n";
   }
   return file.str();
