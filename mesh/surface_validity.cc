@@ -247,6 +247,18 @@ int LimitFoldingSteps(TinMesh* mesh, const std::vector<Eigen::Vector3d>& before,
   return count;
 }
 
+std::vector<bool> GrowByRings(const TinMesh& mesh, std::vector<bool> region, int rings) {
+  for (int grow = 0; grow < rings; ++grow) {
+    std::vector<bool> wider = region;
+    for (auto v : mesh.vertices()) {
+      if (!region[v.idx()]) continue;
+      for (auto w : mesh.vv_range(v)) wider[w.idx()] = true;
+    }
+    region.swap(wider);
+  }
+  return region;
+}
+
 namespace {
 
 // One round of the untangling: the free vertices of `region` move halfway to the mean of
@@ -281,15 +293,7 @@ std::vector<bool> CrossingRegion(const TinMesh& mesh, const std::set<std::pair<i
       for (auto v : mesh.fv_range(mesh.face_handle(f))) region[v.idx()] = true;
     }
   }
-  for (int grow = 0; grow < rings; ++grow) {
-    std::vector<bool> wider = region;
-    for (auto v : mesh.vertices()) {
-      if (!region[v.idx()]) continue;
-      for (auto w : mesh.vv_range(v)) wider[w.idx()] = true;
-    }
-    region.swap(wider);
-  }
-  return region;
+  return GrowByRings(mesh, std::move(region), rings);
 }
 
 // The widest membrane tried: the tangle grown by 4 rings.
@@ -396,6 +400,31 @@ struct UntangleState {
   std::vector<Eigen::Vector3d> best;
   size_t best_pairs = 0;
   UntangleReport report;
+  const std::vector<bool>* movable = nullptr;  // null: every vertex may move
+
+  bool Movable(const TinMesh& mesh, int face) const {
+    if (!movable) return true;
+    for (auto v : mesh.fv_range(mesh.face_handle(face))) {
+      if ((*movable)[v.idx()]) return true;
+    }
+    return false;
+  }
+  // The pairs the untangling works on: those with a movable corner. The others stay as
+  // they are (no vertex of theirs moves), so the counts of the rounds differ by the same
+  // number of pairs whether they are counted or not.
+  std::set<std::pair<int, int>> Scoped(const TinMesh& mesh) const {
+    if (!movable) return pairs;
+    std::set<std::pair<int, int>> scoped;
+    for (const auto& pair : pairs) {
+      if (Movable(mesh, pair.first) || Movable(mesh, pair.second)) scoped.insert(pair);
+    }
+    return scoped;
+  }
+  std::vector<bool> Limit(std::vector<bool> region) const {
+    if (!movable) return region;
+    for (size_t v = 0; v < region.size(); ++v) region[v] = region[v] && (*movable)[v];
+    return region;
+  }
 
   void RememberIfBest(const TinMesh& mesh) {
     report.pairs_after = static_cast<int>(pairs.size());
@@ -411,7 +440,8 @@ struct UntangleState {
 bool TryMembranes(TinMesh* mesh, const std::set<std::pair<int, int>>& tangle, UntangleState* state) {
   for (int rings = 1; rings <= kMaxMembraneRings; ++rings) {
     const std::vector<Eigen::Vector3d> before = Points(*mesh);
-    const std::vector<bool> region = CrossingRegion(*mesh, tangle, rings, std::vector<bool>(mesh->n_vertices(), false));
+    const std::vector<bool> region =
+        state->Limit(CrossingRegion(*mesh, tangle, rings, std::vector<bool>(mesh->n_vertices(), false)));
     if (!SolveMembrane(mesh, region)) continue;
     ++state->report.membranes;
     // The pairs recounted among the faces near the region only (a tangle may get
@@ -449,9 +479,9 @@ void MembraneRounds(TinMesh* mesh, int max_rounds, UntangleState* state) {
   for (auto vh : mesh->vertices()) mesh->set_point(vh, ToOpenMesh(state->best[vh.idx()]));
   state->pairs = SelfIntersectingPairs(*mesh, state->best);
   bool helped = true;
-  for (int round = 0; round < max_rounds && helped && !state->pairs.empty(); ++round) {
+  for (int round = 0; round < max_rounds && helped && !state->Scoped(*mesh).empty(); ++round) {
     helped = false;
-    for (const std::set<std::pair<int, int>>& tangle : Tangles(*mesh, state->pairs)) {
+    for (const std::set<std::pair<int, int>>& tangle : Tangles(*mesh, state->Scoped(*mesh))) {
       if (TryMembranes(mesh, tangle, state)) helped = true;
     }
   }
@@ -459,8 +489,9 @@ void MembraneRounds(TinMesh* mesh, int max_rounds, UntangleState* state) {
 
 }  // namespace
 
-UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds) {
+UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds, const std::vector<bool>* movable) {
   UntangleState state;
+  state.movable = movable;
   state.pairs = SelfIntersectingPairs(*mesh, Points(*mesh));
   state.report.pairs_before = state.report.pairs_after = static_cast<int>(state.pairs.size());
   // The smoothing can spread a tangle instead of undoing it (45 crossing pairs before a
@@ -471,9 +502,10 @@ UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds) {
   state.best_pairs = state.pairs.size();
   // Folded faces give G1 patches that curl through their neighbours' even where the
   // chord triangles do not cross: their corners are smoothed in the first round too.
-  const std::vector<bool> folded = FoldedFaces(*mesh);
+  std::vector<bool> folded = FoldedFaces(*mesh);
+  for (auto f : mesh->faces()) folded[f.idx()] = folded[f.idx()] && state.Movable(*mesh, f.idx());
   const bool any_fold = std::find(folded.begin(), folded.end(), true) != folded.end();
-  for (int round = 1; round <= max_rounds && (!state.pairs.empty() || (round == 1 && any_fold)); ++round) {
+  for (int round = 1; round <= max_rounds && (!state.Scoped(*mesh).empty() || (round == 1 && any_fold)); ++round) {
     state.report.rounds = round;
     std::vector<bool> seed(mesh->n_vertices(), false);
     if (round == 1) {
@@ -483,7 +515,7 @@ UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds) {
       }
     }
     // A crossing that survived smoothing its own corners needs a wider patch.
-    SmoothRegion(mesh, CrossingRegion(*mesh, state.pairs, round - 1, std::move(seed)), 3);
+    SmoothRegion(mesh, state.Limit(CrossingRegion(*mesh, state.Scoped(*mesh), round - 1, std::move(seed))), 3);
     state.pairs = SelfIntersectingPairs(*mesh, Points(*mesh));
     state.RememberIfBest(*mesh);
   }
@@ -493,11 +525,11 @@ UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds) {
   // run nearly to convergence over a patch around it (3-4 of these rounds cleared the
   // 4-11 pairs the short rounds left). Runs only when the rounds and the membranes
   // above failed.
-  for (int extra = 1; extra <= max_rounds && !state.pairs.empty(); ++extra) {
+  for (int extra = 1; extra <= max_rounds && !state.Scoped(*mesh).empty(); ++extra) {
     state.report.rounds = max_rounds + extra;
     const int sweeps = 3 * (extra + 1) * (extra + 1);
     const std::vector<bool> region =
-        CrossingRegion(*mesh, state.pairs, extra, std::vector<bool>(mesh->n_vertices(), false));
+        state.Limit(CrossingRegion(*mesh, state.Scoped(*mesh), extra, std::vector<bool>(mesh->n_vertices(), false)));
     SmoothRegion(mesh, region, sweeps);
     state.pairs = SelfIntersectingPairs(*mesh, Points(*mesh));
     state.RememberIfBest(*mesh);

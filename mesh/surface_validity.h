@@ -69,6 +69,9 @@ void CopyStepFields(const GuardedStep& step, Report* report) {
   report->max_move = step.moves.max;
 }
 
+// `region` (one flag per vertex) with the vertices up to `rings` edges from it added.
+std::vector<bool> GrowByRings(const TinMesh& mesh, std::vector<bool> region, int rings);
+
 // Repair of crossings the per-window fold guard cannot see (between windows, after
 // splits): the vertices of crossing triangles, and from round 2 on their rings grown by
 // one per round, move halfway to the mean of their neighbours (three Jacobi sweeps per
@@ -81,6 +84,9 @@ void CopyStepFields(const GuardedStep& step, Report* report) {
 // lies in their regions, hence last). Boundary vertices stay. The points of the round or
 // membrane that left the fewest pairs are kept (never more than before).
 // Vertex normals are not updated (the caller does). Returns the crossing pairs left.
+// `movable` (one flag per vertex), when given, confines the untangling to a trial's
+// neighbourhood: only the vertices it flags move, only the crossing pairs and folded faces
+// with a flagged corner are worked on, and the pairs elsewhere are counted as they stand.
 struct UntangleReport {
   int pairs_before = 0;
   int pairs_after = 0;
@@ -89,6 +95,7 @@ struct UntangleReport {
   int vertices_moved = 0;  // vertices that end elsewhere than they began
   bool kept_best_round = false;  // the last round left more pairs than an earlier one, whose points were restored
 };
-UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds = 8);
+UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds = 8,
+                                         const std::vector<bool>* movable = nullptr);
 
 }  // namespace facets

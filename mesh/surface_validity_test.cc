@@ -148,6 +148,38 @@ TEST(SurfaceValidity, CrossingTrianglesAreUntangledLocally) {
   EXPECT_LE(report.vertices_moved, 49);
 }
 
+// Two tangles 10 m apart, the untangling confined to the vertices within 4 m of one of
+// them (a trial's neighbourhood): that one is cleared, the other keeps its pairs and
+// every vertex outside the mask stays where it was.
+TEST(SurfaceValidity, ConfinedUntanglingLeavesTheOtherTangle) {
+  TinMesh mesh = Grid(16);
+  const auto near = VertexAt(mesh, 4, 4);
+  const auto far = VertexAt(mesh, 12, 12);
+  ASSERT_TRUE(near.is_valid() && far.is_valid());
+  mesh.set_point(far, ToOpenMesh(Eigen::Vector3d(13.6, 12.3, 0.0)));
+  const int far_pairs = CountSelfIntersections(mesh);
+  ASSERT_GT(far_pairs, 0);
+  mesh.set_point(near, ToOpenMesh(Eigen::Vector3d(5.6, 4.3, 0.0)));
+  const int pairs = CountSelfIntersections(mesh);
+  ASSERT_GT(pairs, far_pairs);
+  const std::vector<Eigen::Vector3d> before = Points(mesh);
+  std::vector<bool> movable(mesh.n_vertices(), false);
+  for (auto v : mesh.vertices()) {
+    movable[v.idx()] = (before[v.idx()] - Eigen::Vector3d(4, 4, 0)).lpNorm<Eigen::Infinity>() <= 4.0 + 1e-9;
+  }
+  const UntangleReport report = UntangleSelfIntersections(&mesh, 8, &movable);
+  EXPECT_EQ(report.pairs_before, pairs);
+  EXPECT_EQ(report.pairs_after, far_pairs);
+  EXPECT_EQ(CountSelfIntersections(mesh), far_pairs);
+  const std::vector<Eigen::Vector3d> after = Points(mesh);
+  int outside_moved = 0;
+  for (auto v : mesh.vertices()) outside_moved += !movable[v.idx()] && after[v.idx()] != before[v.idx()] ? 1 : 0;
+  EXPECT_EQ(outside_moved, 0);
+  EXPECT_GT(report.vertices_moved, 0);
+  // Unconfined, the same untangling clears both.
+  EXPECT_EQ(UntangleSelfIntersections(&mesh).pairs_after, 0);
+}
+
 // A pleat: a strip of faces folded flat over its neighbours (1-2 cm apart), as the
 // finest level left it in a region one image sees (block region C, --thorough-walls,
 // session 19; tests/data/pleat_patch.ply is the TIN 12 rings around its crossing

@@ -49,7 +49,8 @@ LaidLip LayLip(const RunContext& run, TinMesh* mesh, const TinMesh& before, cons
   // the corners of folded faces.
   if (laid.now.WorseThan(faults) && run.options.fold_lips_untangle_rounds > 0) {
     const auto clock = run.profile->Part("untangling");
-    const UntangleReport untangle = UntangleSelfIntersections(mesh, run.options.fold_lips_untangle_rounds);
+    const std::vector<bool> movable = TrialNeighbourhood(*mesh, before);
+    const UntangleReport untangle = UntangleSelfIntersections(mesh, run.options.fold_lips_untangle_rounds, &movable);
     UpdateVertexNormals(mesh);
     laid.now.crossing = untangle.pairs_after;
     laid.now.folded = CountFoldedFaces(*mesh);

@@ -47,11 +47,19 @@ SurfaceFaults CountSurfaceFaults(const RunContext& run, const TinMesh& mesh) {
   return {CountSelfIntersections(mesh), CountFoldedFaces(mesh)};
 }
 
-SurfaceFaults UntangleNewFaults(const RunContext& run, TinMesh* mesh, const SurfaceFaults& before, int rounds) {
+std::vector<bool> TrialNeighbourhood(const TinMesh& mesh, const TinMesh& before) {
+  std::vector<bool> region(mesh.n_vertices(), false);
+  for (auto v : mesh.vertices()) region[v.idx()] = mesh.point(v) != before.point(before.vertex_handle(v.idx()));
+  return GrowByRings(mesh, std::move(region), kTrialUntangleRings);
+}
+
+SurfaceFaults UntangleNewFaults(const RunContext& run, TinMesh* mesh, const TinMesh& before_mesh,
+                                const SurfaceFaults& before, int rounds) {
   SurfaceFaults now = CountSurfaceFaults(run, *mesh);
   if (!now.WorseThan(before) || rounds <= 0) return now;
   const auto clock = run.profile->Part("untangling");
-  now.crossing = UntangleSelfIntersections(mesh, rounds).pairs_after;
+  const std::vector<bool> movable = TrialNeighbourhood(*mesh, before_mesh);
+  now.crossing = UntangleSelfIntersections(mesh, rounds, &movable).pairs_after;
   UpdateVertexNormals(mesh);
   now.folded = CountFoldedFaces(*mesh);
   return now;

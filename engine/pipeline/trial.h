@@ -7,6 +7,8 @@
 // vertices (judged by their own sigma0 before and after, engine/pipeline/local_readjustment.h).
 #pragma once
 
+#include <vector>
+
 #include "engine/pipeline/run_context.h"
 
 namespace facets {
@@ -38,8 +40,18 @@ struct SurfaceFaults {
 };
 SurfaceFaults CountSurfaceFaults(const RunContext& run, const TinMesh& mesh);
 
-// A proposal that adds faults is untangled (at most `rounds` rounds of
-// UntangleSelfIntersections); returns the faults left.
-SurfaceFaults UntangleNewFaults(const RunContext& run, TinMesh* mesh, const SurfaceFaults& before, int rounds);
+// The vertices a trial's untangling may move: those the proposal moved from `before`
+// (same vertex count), grown by kTrialUntangleRings edge rings. The untangling grows its
+// regions by at most 4 rings from the corners of a crossing face (UntangleSelfIntersections
+// with 4 rounds), and a new crossing has a face with a moved corner: 8 rings hold them with
+// room, and keep the trial's re-adjustment to the windows around the proposal instead of
+// every window that holds an older crossing or fold of the level.
+constexpr int kTrialUntangleRings = 8;
+std::vector<bool> TrialNeighbourhood(const TinMesh& mesh, const TinMesh& before);
+
+// A proposal that adds faults is untangled within its neighbourhood (at most `rounds`
+// rounds of UntangleSelfIntersections, TrialNeighbourhood); returns the faults left.
+SurfaceFaults UntangleNewFaults(const RunContext& run, TinMesh* mesh, const TinMesh& before_mesh,
+                                const SurfaceFaults& before, int rounds);
 
 }  // namespace facets

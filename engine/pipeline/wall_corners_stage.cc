@@ -95,7 +95,7 @@ void TryCorner(const RunContext& run, LevelPass* pass, const WallCorner& corner,
   if (laid.moved == 0) return;
   UpdateVertexNormals(&mesh);
   std::ostringstream line = CornerLine(*pass, corner, laid);
-  const SurfaceFaults now = UntangleNewFaults(run, &mesh, *faults, run.options.fold_lips_untangle_rounds);
+  const SurfaceFaults now = UntangleNewFaults(run, &mesh, before, *faults, run.options.fold_lips_untangle_rounds);
   if (now.WorseThan(*faults)) {
     line << ": " << now.crossing - faults->crossing << " crossing pairs and " << now.folded - faults->folded
          << " folded faces, left";
