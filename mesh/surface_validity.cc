@@ -479,9 +479,11 @@ void MembraneRounds(TinMesh* mesh, int max_rounds, UntangleState* state) {
   for (auto vh : mesh->vertices()) mesh->set_point(vh, ToOpenMesh(state->best[vh.idx()]));
   state->pairs = SelfIntersectingPairs(*mesh, state->best);
   bool helped = true;
-  for (int round = 0; round < max_rounds && helped && !state->Scoped(*mesh).empty(); ++round) {
+  for (int round = 0; round < max_rounds && helped; ++round) {
+    const std::set<std::pair<int, int>> scoped = state->Scoped(*mesh);
+    if (scoped.empty()) break;
     helped = false;
-    for (const std::set<std::pair<int, int>>& tangle : Tangles(*mesh, state->Scoped(*mesh))) {
+    for (const std::set<std::pair<int, int>>& tangle : Tangles(*mesh, scoped)) {
       if (TryMembranes(mesh, tangle, state)) helped = true;
     }
   }
@@ -505,7 +507,9 @@ UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds, const st
   std::vector<bool> folded = FoldedFaces(*mesh);
   for (auto f : mesh->faces()) folded[f.idx()] = folded[f.idx()] && state.Movable(*mesh, f.idx());
   const bool any_fold = std::find(folded.begin(), folded.end(), true) != folded.end();
-  for (int round = 1; round <= max_rounds && (!state.Scoped(*mesh).empty() || (round == 1 && any_fold)); ++round) {
+  for (int round = 1; round <= max_rounds; ++round) {
+    const std::set<std::pair<int, int>> scoped = state.Scoped(*mesh);
+    if (scoped.empty() && !(round == 1 && any_fold)) break;
     state.report.rounds = round;
     std::vector<bool> seed(mesh->n_vertices(), false);
     if (round == 1) {
@@ -515,7 +519,7 @@ UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds, const st
       }
     }
     // A crossing that survived smoothing its own corners needs a wider patch.
-    SmoothRegion(mesh, state.Limit(CrossingRegion(*mesh, state.Scoped(*mesh), round - 1, std::move(seed))), 3);
+    SmoothRegion(mesh, state.Limit(CrossingRegion(*mesh, scoped, round - 1, std::move(seed))), 3);
     state.pairs = SelfIntersectingPairs(*mesh, Points(*mesh));
     state.RememberIfBest(*mesh);
   }
@@ -525,11 +529,13 @@ UntangleReport UntangleSelfIntersections(TinMesh* mesh, int max_rounds, const st
   // run nearly to convergence over a patch around it (3-4 of these rounds cleared the
   // 4-11 pairs the short rounds left). Runs only when the rounds and the membranes
   // above failed.
-  for (int extra = 1; extra <= max_rounds && !state.Scoped(*mesh).empty(); ++extra) {
+  for (int extra = 1; extra <= max_rounds; ++extra) {
+    const std::set<std::pair<int, int>> scoped = state.Scoped(*mesh);
+    if (scoped.empty()) break;
     state.report.rounds = max_rounds + extra;
     const int sweeps = 3 * (extra + 1) * (extra + 1);
     const std::vector<bool> region =
-        state.Limit(CrossingRegion(*mesh, state.Scoped(*mesh), extra, std::vector<bool>(mesh->n_vertices(), false)));
+        state.Limit(CrossingRegion(*mesh, scoped, extra, std::vector<bool>(mesh->n_vertices(), false)));
     SmoothRegion(mesh, region, sweeps);
     state.pairs = SelfIntersectingPairs(*mesh, Points(*mesh));
     state.RememberIfBest(*mesh);
