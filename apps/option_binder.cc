@@ -164,11 +164,31 @@ CLI::Option* OptionBinder::Negative(const std::string& name, bool& field, const 
   return Keep(app_->add_flag("!" + name, field, help)->default_function([&field] { return ConfigText(!field); }));
 }
 
+namespace {
+
+// CLI11 sums a flag function's values with detail::to_flag_value, which throws
+// std::invalid_argument or std::out_of_range (not a CLI::ParseError) on a value that is
+// neither a switch word nor a number, as in `normal-search = " "` in a --config file.
+CLI::Validator SwitchValue() {
+  return CLI::Validator(
+      [](std::string& value) -> std::string {
+        try {
+          CLI::detail::to_flag_value(value);
+          return {};
+        } catch (const std::exception&) {
+          return "'" + value + "' is not a switch value (true, false, yes, no, on, off, 1, 0)";
+        }
+      },
+      "SWITCH");
+}
+
+}  // namespace
+
 CLI::Option* OptionBinder::OptionalSwitch(const std::string& names, std::optional<bool>& field,
                                           const std::string& help) const {
   auto set = [&field](std::int64_t count) { field = count > 0; };
   auto text = [&field] { return field ? ConfigText(*field) : std::string(); };
-  return Keep(app_->add_flag_function(names, set, help)->default_function(text));
+  return Keep(app_->add_flag_function(names, set, help)->default_function(text)->check(SwitchValue()));
 }
 
 }  // namespace facets

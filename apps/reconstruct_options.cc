@@ -88,7 +88,11 @@ void BindQuality(const OptionBinder& bind, ReconstructAppSettings& app, Reconstr
 }
 
 void BindProducts(const OptionBinder& bind, ReconstructAppSettings& app) {
-  bind.Value("--out", app.out, "output folder")->required();
+  bind.Value("--out", app.out, "output folder")
+      ->required()
+      ->check(CLI::Validator(
+          [](const std::string& folder) { return folder.empty() ? std::string("the output folder is empty") : ""; },
+          "FOLDER"));
   bind.Negative("--no-glb", app.glb, "do not write surface.glb");
   bind.Negative("--no-vrml", app.vrml, "do not write surface.wrl");
   bind.Negative("--no-rasters", app.rasters, "do not write ortho.tif, dsm.tif, sigma.tif");

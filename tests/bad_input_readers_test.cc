@@ -301,6 +301,8 @@ TEST_F(BadBlock, ConfigFileAndRegion) {
       {"scene = moon", {"key 'scene' in [reconstruct]: bad value 'moon'"}},
       {"threads = -2", {"key 'threads' in [reconstruct]: bad value '-2'"}},
       {"no-glb = maybe", {"key 'no-glb' in [reconstruct]: bad value 'maybe'"}},
+      {"normal-search = \" \"", {"key 'normal-search' in [reconstruct]: bad value ' '", "not a switch value"}},
+      {"normal-search = 99999999999999999999", {"bad value '99999999999999999999'", "not a switch value"}},
   };
   for (const auto& [line, needles] : values) {
     WriteText(ini, "[reconstruct]\n" + line + "\n");
@@ -314,6 +316,13 @@ TEST_F(BadBlock, ConfigFileAndRegion) {
   EXPECT_GT(line_value.status, 0) << line_value.err;
   EXPECT_EQ(line_value.err.find("bad.ini"), std::string::npos) << line_value.err;
   EXPECT_NE(line_value.err.find("--levels"), std::string::npos) << line_value.err;
+  // An empty output folder, given in the file or on the line: refused before anything is written.
+  const std::string without_out = "reconstruct --colmap " + (dir_ / "sparse").string() + " --images " +
+                                  (dir_ / "images").string();
+  WriteText(ini, "[reconstruct]\nout = \"\"\n");
+  ExpectRefused(without_out + " --config " + ini.string(), {"key 'out' in [reconstruct]", "output folder is empty"},
+                Out());
+  ExpectRefused(without_out + " --out ''", {"--out", "output folder is empty"}, Out());
   ExpectRefused(Colmap() + " --config " + (dir_ / "missing.ini").string(), {"missing.ini", "does not exist"}, Out());
   fs::create_directories(dir_ / "folder.ini");
   ExpectRefused(Colmap() + " --config " + (dir_ / "folder.ini").string(), {"folder.ini", "directory"}, Out());
