@@ -99,11 +99,24 @@ bool CanFlip(const TinMesh& mesh, TinMesh::EdgeHandle eh) {
   return Cross2(q.a - q.c, q.d - q.c) > eps && Cross2(q.b - q.d, q.c - q.d) > eps;
 }
 
-int MakeTangentDelaunay(TinMesh* mesh, int max_flips) {
-  if (max_flips <= 0) max_flips = 10 * static_cast<int>(mesh->n_edges()) + 10;
+namespace {
+
+// Flips queued edges that are not Delaunay and CanFlip, queueing the edges of each
+// flipped quad; with `within`, only edges with both ends flagged are flipped or queued.
+int FlipQueued(TinMesh* mesh, const std::vector<bool>* within, int max_flips) {
+  auto inside = [&](TinMesh::EdgeHandle e) {
+    if (within == nullptr) return true;
+    const auto h = mesh->halfedge_handle(e, 0);
+    return (*within)[mesh->from_vertex_handle(h).idx()] && (*within)[mesh->to_vertex_handle(h).idx()];
+  };
   std::deque<TinMesh::EdgeHandle> queue;
-  std::vector<char> queued(mesh->n_edges(), 1);
-  for (auto e : mesh->edges()) queue.push_back(e);
+  std::vector<char> queued(mesh->n_edges(), 0);
+  auto push = [&](TinMesh::EdgeHandle e) {
+    if (queued[e.idx()] || !inside(e)) return;
+    queued[e.idx()] = 1;
+    queue.push_back(e);
+  };
+  for (auto e : mesh->edges()) push(e);
   int flips = 0;
   while (!queue.empty() && flips < max_flips) {
     const auto e = queue.front();
@@ -118,16 +131,46 @@ int MakeTangentDelaunay(TinMesh* mesh, int max_flips) {
     mesh->set_normal(mesh->face_handle(h0), mesh->calc_face_normal(mesh->face_handle(h0)));
     mesh->set_normal(mesh->face_handle(h1), mesh->calc_face_normal(mesh->face_handle(h1)));
     for (auto h : {h0, h1}) {
-      for (auto hh : {mesh->next_halfedge_handle(h), mesh->prev_halfedge_handle(h)}) {
-        const auto ee = mesh->edge_handle(hh);
-        if (!queued[ee.idx()]) {
-          queued[ee.idx()] = 1;
-          queue.push_back(ee);
-        }
-      }
+      for (auto hh : {mesh->next_halfedge_handle(h), mesh->prev_halfedge_handle(h)}) push(mesh->edge_handle(hh));
     }
   }
   return flips;
+}
+
+}  // namespace
+
+int MakeTangentDelaunay(TinMesh* mesh, int max_flips) {
+  if (max_flips <= 0) max_flips = 10 * static_cast<int>(mesh->n_edges()) + 10;
+  return FlipQueued(mesh, nullptr, max_flips);
+}
+
+int MakeTangentDelaunayWithin(TinMesh* mesh, const std::vector<bool>& within) {
+  if (within.size() != mesh->n_vertices()) {
+    throw std::invalid_argument("MakeTangentDelaunayWithin: one flag per vertex needed");
+  }
+  return FlipQueued(mesh, &within, 10 * static_cast<int>(mesh->n_edges()) + 10);
+}
+
+std::vector<bool> VerticesChangedFrom(const TinMesh& mesh, const TinMesh& before) {
+  if (before.n_vertices() > mesh.n_vertices() || before.n_faces() > mesh.n_faces()) {
+    throw std::invalid_argument("VerticesChangedFrom: the surface before has more vertices or faces");
+  }
+  std::vector<bool> changed(mesh.n_vertices(), true);
+  for (auto v : before.vertices()) changed[v.idx()] = mesh.point(mesh.vertex_handle(v.idx())) != before.point(v);
+  for (auto f : mesh.faces()) {
+    bool same = static_cast<size_t>(f.idx()) < before.n_faces();
+    if (same) {
+      std::array<int, 3> now{}, was{};
+      int k = 0;
+      for (auto v : mesh.fv_range(f)) now[k++] = v.idx();
+      k = 0;
+      for (auto v : before.fv_range(before.face_handle(f.idx()))) was[k++] = v.idx();
+      same = now == was;
+    }
+    if (same) continue;
+    for (auto v : mesh.fv_range(f)) changed[v.idx()] = true;
+  }
+  return changed;
 }
 
 bool RemoveVertex(TinMesh* mesh, TinMesh::VertexHandle vh) {
@@ -380,11 +423,21 @@ QualityReport QualityPass(TinMesh* mesh, const QualityOptions& options) {
   options.Check();
   QualityReport report;
   const double limit = options.split_factor * options.target_edge_length;
+  if (options.near != nullptr && options.near->size() != mesh->n_vertices()) {
+    throw std::invalid_argument("QualityPass: one `near` flag per vertex needed");
+  }
+  // A vertex inserted on an edge between two flagged ones is flagged too; one on an edge
+  // leaving the flagged vertices is not, so the splits do not creep outwards round by round.
+  std::vector<bool> flagged = options.near != nullptr ? *options.near : std::vector<bool>();
+  auto near = [&](TinMesh::VertexHandle v) { return options.near == nullptr || flagged[v.idx()]; };
   for (int round = 0; round < options.max_rounds; ++round) {
     std::vector<std::pair<double, TinMesh::EdgeHandle>> long_edges;
     for (auto e : mesh->edges()) {
       const double len = mesh->calc_edge_length(e);
-      if (len > limit) long_edges.emplace_back(len, e);
+      const auto h = mesh->halfedge_handle(e, 0);
+      if (len > limit && (near(mesh->from_vertex_handle(h)) || near(mesh->to_vertex_handle(h)))) {
+        long_edges.emplace_back(len, e);
+      }
     }
     if (long_edges.empty()) break;
     // Longest first; edges created by earlier splits in this round wait for the next.
@@ -392,11 +445,20 @@ QualityReport QualityPass(TinMesh* mesh, const QualityOptions& options) {
               [](const auto& x, const auto& y) { return x.first > y.first; });
     for (const auto& [len, e] : long_edges) {
       if (mesh->calc_edge_length(e) <= limit) continue;
+      const auto h = mesh->halfedge_handle(e, 0);
+      const bool both_near = near(mesh->from_vertex_handle(h)) && near(mesh->to_vertex_handle(h));
       SplitEdge(mesh, e);
+      if (options.near != nullptr) flagged.push_back(both_near);
       ++report.splits;
     }
   }
-  report.flips = MakeTangentDelaunay(mesh);
+  if (options.near == nullptr) {
+    report.flips = MakeTangentDelaunay(mesh);
+  } else {
+    std::vector<bool> within = *options.near;  // and every inserted vertex
+    within.resize(mesh->n_vertices(), true);
+    report.flips = MakeTangentDelaunayWithin(mesh, within);
+  }
   for (auto e : mesh->edges()) {
     report.max_edge_length = std::max(report.max_edge_length, mesh->calc_edge_length(e));
   }
@@ -406,8 +468,13 @@ QualityReport QualityPass(TinMesh* mesh, const QualityOptions& options) {
 int CountLongEdges(const TinMesh& mesh, const QualityOptions& options) {
   options.Check();
   const double limit = options.split_factor * options.target_edge_length;
+  auto near = [&](TinMesh::VertexHandle v) { return options.near == nullptr || (*options.near)[v.idx()]; };
   int count = 0;
-  for (auto e : mesh.edges()) count += mesh.calc_edge_length(e) > limit ? 1 : 0;
+  for (auto e : mesh.edges()) {
+    const auto h = mesh.halfedge_handle(e, 0);
+    const bool counted = near(mesh.from_vertex_handle(h)) || near(mesh.to_vertex_handle(h));
+    count += counted && mesh.calc_edge_length(e) > limit ? 1 : 0;
+  }
   return count;
 }
 

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <vector>
 
 #include "mesh/tin.h"
 
@@ -27,6 +28,14 @@ bool CanFlip(const TinMesh& mesh, TinMesh::EdgeHandle eh);
 // Flips every non-Delaunay edge that CanFlip until all are Delaunay (edge queue; at most
 // max_flips flips, 0 = 10 * number of edges). Returns the number of flips.
 int MakeTangentDelaunay(TinMesh* mesh, int max_flips = 0);
+// The same over the edges whose two ends are flagged in `within` (one flag per vertex):
+// the rest of the TIN keeps its edges, Delaunay or not.
+int MakeTangentDelaunayWithin(TinMesh* mesh, const std::vector<bool>& within);
+
+// Vertices of `mesh` whose surroundings differ from `before` (an earlier state of the same
+// TIN, vertices and faces only appended since, none deleted): moved, inserted, or a
+// corner of a face that is new or whose corners changed (a split or a flip).
+std::vector<bool> VerticesChangedFrom(const TinMesh& mesh, const TinMesh& before);
 
 // Removes vertex vh by collapsing its shortest collapsible outgoing edge into the
 // neighbour, then restores tangent-plane Delaunay around that neighbour. Calls
@@ -70,6 +79,10 @@ struct QualityOptions {
   double split_factor = 1.5;
   // Rounds of splitting; each round halves the longest edges.
   int max_rounds = 20;
+  // When set (one flag per vertex): only edges with a flagged end are split (a vertex
+  // inserted between two flagged ones counts as flagged in the next round), and only
+  // edges between flagged or inserted vertices are flipped (MakeTangentDelaunayWithin).
+  const std::vector<bool>* near = nullptr;
   void Check() const;
 };
 struct QualityReport {
@@ -81,7 +94,8 @@ struct QualityReport {
 // midpoints, then flips to restore tangent-plane Delaunay. Vertex normals of old
 // vertices are kept; face normals updated.
 QualityReport QualityPass(TinMesh* mesh, const QualityOptions& options);
-// Edges QualityPass would split (longer than split_factor x target_edge_length).
+// Edges QualityPass would split in its first round (longer than split_factor x
+// target_edge_length, with a flagged end when `near` is set).
 int CountLongEdges(const TinMesh& mesh, const QualityOptions& options);
 
 // Vertices no image saw (views[v] == 0: hidden under a roof that rose over them, or

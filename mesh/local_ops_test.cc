@@ -227,15 +227,19 @@ TEST(LocalOps, RemoveVertex) {
   for (auto e : mesh.edges()) EXPECT_TRUE(IsTangentDelaunay(mesh, e, 1e-6) || !CanFlip(mesh, e));
 }
 
-TEST(LocalOps, QualityPassSplitsWall) {
-  // A 2.5D start whose middle strip stood up into a 3 m wall: x in [0.4, 0.5] rises from
-  // 0 to 3. The wall's triangles are stretched 30x vertically.
+// A 2.5D start whose middle strip stood up into a 3 m wall: x in [0.4, 0.5] rises from
+// 0 to 3. The wall's triangles are stretched 30x vertically.
+TinMesh StoodUpWall() {
   StartGridOptions opt;
   opt.min = Eigen::Vector2d(0, 0);
   opt.max = Eigen::Vector2d(1, 1);
   opt.spacing = 0.1;
   opt.height = [](double x, double) { return x < 0.45 ? 0.0 : 3.0; };
-  TinMesh mesh = MakeStartGrid(opt);
+  return MakeStartGrid(opt);
+}
+
+TEST(LocalOps, QualityPassSplitsWall) {
+  TinMesh mesh = StoodUpWall();
   double max_before = 0;
   for (auto e : mesh.edges()) max_before = std::max(max_before, mesh.calc_edge_length(e));
   QualityOptions q;
@@ -254,6 +258,53 @@ TEST(LocalOps, QualityPassSplitsWall) {
   int bad = 0;
   for (auto e : mesh.edges()) bad += !IsTangentDelaunay(mesh, e) && CanFlip(mesh, e);
   EXPECT_EQ(bad, 0);
+}
+
+TEST(LocalOps, QualityPassNearSplitsOnlyThereAndSaysWhatChanged) {
+  // The same wall, 1 m long in y; only the vertices with y < 0.35 are flagged: the wall's
+  // stretched edges there are split and flipped, those beyond keep their length, and
+  // VerticesChangedFrom names every vertex of a face the pass made or changed.
+  TinMesh mesh = StoodUpWall();
+  const TinMesh before = mesh;
+  std::vector<bool> near(mesh.n_vertices(), false);
+  for (auto v : mesh.vertices()) near[v.idx()] = mesh.point(v)[1] < 0.35;
+  QualityOptions q;
+  q.target_edge_length = 0.1 * std::sqrt(2.0);
+  q.near = &near;
+  const int long_near = CountLongEdges(mesh, q);
+  const QualityReport rep = QualityPass(&mesh, q);
+  EXPECT_GT(rep.splits, 0);
+  EXPECT_GE(rep.splits, long_near);
+  int long_far = 0, long_far_before = 0;
+  const double limit = q.split_factor * q.target_edge_length;
+  auto far = [](const TinMesh& m, TinMesh::EdgeHandle e) {
+    const auto h = m.halfedge_handle(e, 0);
+    return m.point(m.from_vertex_handle(h))[1] > 0.55 && m.point(m.to_vertex_handle(h))[1] > 0.55;
+  };
+  for (auto e : before.edges()) long_far_before += far(before, e) && before.calc_edge_length(e) > limit;
+  for (auto e : mesh.edges()) long_far += far(mesh, e) && mesh.calc_edge_length(e) > limit;
+  EXPECT_GT(long_far_before, 0);
+  EXPECT_EQ(long_far, long_far_before);
+  EXPECT_GT(MinFaceVertexNormalDot(mesh), 0.0);
+  const std::vector<bool> changed = VerticesChangedFrom(mesh, before);
+  int changed_far = 0;
+  for (auto v : mesh.vertices()) {
+    if (v.idx() >= static_cast<int>(before.n_vertices())) {
+      EXPECT_TRUE(changed[v.idx()]);
+    }
+    changed_far += changed[v.idx()] && mesh.point(v)[1] > 0.65;
+  }
+  EXPECT_EQ(changed_far, 0);
+  for (auto f : mesh.faces()) {
+    std::vector<int> now, was;
+    for (auto v : mesh.fv_range(f)) now.push_back(v.idx());
+    if (f.idx() < static_cast<int>(before.n_faces())) {
+      for (auto v : before.fv_range(before.face_handle(f.idx()))) was.push_back(v.idx());
+    }
+    if (now == was) continue;
+    for (int v : now) EXPECT_TRUE(changed[v]) << "face " << f.idx();
+  }
+  EXPECT_EQ(VerticesChangedFrom(before, before), std::vector<bool>(before.n_vertices(), false));
 }
 
 // A 3 x 3 grid of 1 m, each cell cut by its diagonal from (i, j) to (i + 1, j + 1),

@@ -15,6 +15,7 @@
 #include "engine/pipeline/level_windows.h"
 #include "engine/pipeline/local_readjustment.h"
 #include "io/colmap_io.h"
+#include "mesh/local_ops.h"
 #include "scenes/renderer.h"
 #include "scenes/scene.h"
 #include "scenes/truth_mesh.h"
@@ -192,17 +193,31 @@ TEST(Windows, PartitionOfAFaceSubsetCoversItOnce) {
 // (along its normal) within 3 sigma; every vertex outside those windows' cores keeps its
 // position and its per-vertex values to the bit; the local windows' sigma0 comes back to
 // its value before the push, and the level's pooled sigma0 stays.
-TEST(Windows, ALocalReadjustmentBringsBackAPushedPatchAndLeavesTheRestAlone) {
-  const WindowsGable gable;
+// The gable adjusted in windows of at most 250 faces, the start of the local tests.
+struct AdjustedGable {
+  WindowsGable gable;
   AdjustmentOptions adjustment;
-  adjustment.crease_angle_deg = 15.0;  // as in ManyWindowsMatchOneWindowWithinSigma
-  adjustment.break_off = 0.002;
-  adjustment.max_step = 0.5;
   LevelWindowOptions windows;
-  windows.partition.max_faces = 250;
-  TinMesh mesh = gable.start;
-  const LevelAdjustment level = AdjustLevelInWindows(&mesh, gable.loaded.images, adjustment, windows, true, {});
-  const TinMesh adjusted = mesh;
+  TinMesh adjusted;
+  LevelAdjustment level;
+  AdjustedGable() {
+    adjustment.crease_angle_deg = 15.0;  // as in ManyWindowsMatchOneWindowWithinSigma
+    adjustment.break_off = 0.002;
+    adjustment.max_step = 0.5;
+    windows.partition.max_faces = 250;
+    adjusted = gable.start;
+    level = AdjustLevelInWindows(&adjusted, gable.loaded.images, adjustment, windows, true, {});
+  }
+};
+
+TEST(Windows, ALocalReadjustmentBringsBackAPushedPatchAndLeavesTheRestAlone) {
+  const AdjustedGable run;
+  const WindowsGable& gable = run.gable;
+  const AdjustmentOptions& adjustment = run.adjustment;
+  const LevelWindowOptions& windows = run.windows;
+  const LevelAdjustment& level = run.level;
+  const TinMesh& adjusted = run.adjusted;
+  TinMesh mesh = adjusted;
 
   // The patch: interior vertices within 4.5 m of a point on a roof plane, away from
   // eave and ridge.
@@ -286,6 +301,66 @@ TEST(Windows, ALocalReadjustmentBringsBackAPushedPatchAndLeavesTheRestAlone) {
   int same = 0;
   for (size_t i = 0; i < local.level.grey.size(); ++i) same += local.level.grey[i] == level.grey[i];
   EXPECT_GT(same, static_cast<int>(local.level.grey.size() / 3));
+}
+
+// The same after edges were split around a point of the roof (QualityPass with `near`,
+// the way the wall corners split stretched edges): only the windows around the split
+// faces run; the inserted vertices get their own values from them, every vertex outside
+// their cores keeps its position and values to the bit, and the windows fit as before
+// (a split at G1 midpoints barely changes the surface).
+TEST(Windows, ALocalReadjustmentAfterSplitsCoversTheInsertedVertices) {
+  const AdjustedGable run;
+  TinMesh mesh = run.adjusted;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (auto vh : mesh.vertices()) centre += ToEigen(mesh.point(vh)) / mesh.n_vertices();
+  std::vector<bool> near(mesh.n_vertices(), false);
+  double longest = 0.0;
+  for (auto vh : mesh.vertices()) near[vh.idx()] = (ToEigen(mesh.point(vh)) - centre).head<2>().norm() < 3.0;
+  for (auto e : mesh.edges()) longest = std::max(longest, mesh.calc_edge_length(e));
+  QualityOptions quality;
+  quality.target_edge_length = longest / 2.0;  // every edge near the point is split once
+  quality.max_rounds = 1;
+  quality.near = &near;
+  const QualityReport split = QualityPass(&mesh, quality);
+  UpdateVertexNormals(&mesh);
+  ASSERT_GT(split.splits, 4);
+  const std::vector<bool> changed = VerticesChangedFrom(mesh, run.adjusted);
+  const WindowImages all = [&](const Eigen::AlignedBox3d&, ImageStorage*) { return run.gable.loaded.images; };
+  const LocalReadjustment local =
+      ReadjustAroundSplits(&mesh, run.adjusted, run.level, 1, all, run.adjustment, run.windows, true, {});
+  std::cout << split.splits << " edges split; " << local.windows << " local windows of " << run.level.windows.size()
+            << "; their sigma0 " << local.sigma0_before << " before the splits, " << local.sigma0_after
+            << " after; level " << run.level.summary.sigma0 << " -> " << local.level.summary.sigma0 << "\n";
+  EXPECT_GT(local.windows, 0);
+  EXPECT_LT(local.windows, static_cast<int>(run.level.windows.size()));
+  EXPECT_NEAR(local.sigma0_after, local.sigma0_before, 0.02 * local.sigma0_before);
+  const WindowReport& s = local.level.summary;
+  ASSERT_EQ(s.vertex_sigma.size(), mesh.n_vertices());
+  ASSERT_EQ(s.vertex_views.size(), mesh.n_vertices());
+  std::vector<char> seeds(mesh.n_vertices(), 0);
+  for (size_t v = 0; v < seeds.size(); ++v) seeds[v] = changed[v] ? 1 : 0;
+  std::vector<char> owned(mesh.n_vertices(), 0);
+  const std::vector<int> faces = FacesNearVertices(mesh, seeds, 1);
+  for (const MeshWindow& w : PartitionFacesIntoWindows(mesh, faces, run.windows.partition)) {
+    for (int v : w.owned_vertices) owned[v] = 1;
+  }
+  int untouched = 0;
+  for (auto vh : mesh.vertices()) {
+    const int v = vh.idx();
+    if (v >= static_cast<int>(run.adjusted.n_vertices())) {
+      EXPECT_TRUE(owned[v]) << "inserted vertex " << v;
+      EXPECT_GT(s.vertex_views[v], 1) << "inserted vertex " << v;
+      EXPECT_GT(s.vertex_sigma[v], 0.0) << "inserted vertex " << v;
+      continue;
+    }
+    if (owned[v]) continue;
+    ++untouched;
+    EXPECT_EQ(mesh.point(vh), run.adjusted.point(vh)) << "vertex " << v;
+    EXPECT_EQ(s.vertex_sigma[v], run.level.summary.vertex_sigma[v]) << "vertex " << v;
+  }
+  EXPECT_GT(untouched, static_cast<int>(run.adjusted.n_vertices() / 3));
+  ASSERT_EQ(local.level.grey.size(), local.level.tessellation.points.size());
+  for (double g : local.level.grey) ASSERT_TRUE(std::isfinite(g));
 }
 
 // Runs are reproducible to the bit: the same surface, sigma0 and vertex sigma with one

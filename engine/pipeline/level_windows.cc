@@ -323,16 +323,18 @@ void CopyWindowGrey(const std::vector<WindowResult>& results, const std::vector<
 }
 
 // Faces outside a local run's cores: the grey values of the previous adjustment
-// (same faces, same sub-triangles) where no local window set them.
+// (same faces, same sub-triangles) where no local window set them. A level split since
+// has more faces than the previous adjustment; its new faces are in the cores.
 void CopyPreviousGrey(const LevelAdjustment* previous, const std::vector<int>& face_window, int channels,
                       LevelAdjustment* level) {
-  if (!previous || previous->tessellation.triangles.size() != level->tessellation.triangles.size() ||
+  if (!previous || previous->tessellation.triangles.size() > level->tessellation.triangles.size() ||
       previous->grey.empty()) {
     return;
   }
   const int previous_channels =
       static_cast<int>(previous->grey.size() / std::max<size_t>(1, previous->tessellation.points.size()));
-  for (size_t f = 0; f < face_window.size() && previous_channels == channels; ++f) {
+  const size_t previous_faces = previous->tessellation.triangles.size() / kSubTrianglesPerFace;
+  for (size_t f = 0; f < std::min(face_window.size(), previous_faces) && previous_channels == channels; ++f) {
     if (face_window[f] >= 0) continue;
     for (int k = 0; k < kSubTrianglesPerFace; ++k) {
       const Eigen::Vector3i& to = level->tessellation.triangles[f * kSubTrianglesPerFace + k];

@@ -40,4 +40,14 @@ LocalReadjustment ReadjustAroundMovedVertices(TinMesh* mesh, const TinMesh& befo
                                               const LevelWindowOptions& options, bool keep_grey,
                                               const std::function<void(const std::string&)>& progress);
 
+// The same after edges were split (and flipped) since `adjusted`: `mesh` is `before`
+// with vertices and faces appended and some faces' corners changed (VerticesChangedFrom,
+// mesh/local_ops.h). The windows over the faces within `rings` rings of the changed
+// vertices are adjusted (those of `mesh`) and probed before (those of `before`); the
+// level's per-vertex values of the inserted vertices come from their windows.
+LocalReadjustment ReadjustAroundSplits(TinMesh* mesh, const TinMesh& before, const LevelAdjustment& adjusted,
+                                       int rings, const WindowImages& images, const AdjustmentOptions& adjustment,
+                                       const LevelWindowOptions& options, bool keep_grey,
+                                       const std::function<void(const std::string&)>& progress);
+
 }  // namespace facets

@@ -3,6 +3,7 @@
 #include <utility>
 
 #include "engine/pipeline/local_readjustment.h"
+#include "mesh/local_ops.h"
 #include "mesh/surface_validity.h"
 
 namespace facets {
@@ -48,9 +49,7 @@ SurfaceFaults CountSurfaceFaults(const RunContext& run, const TinMesh& mesh) {
 }
 
 std::vector<bool> TrialNeighbourhood(const TinMesh& mesh, const TinMesh& before) {
-  std::vector<bool> region(mesh.n_vertices(), false);
-  for (auto v : mesh.vertices()) region[v.idx()] = mesh.point(v) != before.point(before.vertex_handle(v.idx()));
-  return GrowByRings(mesh, std::move(region), kTrialUntangleRings);
+  return GrowByRings(mesh, VerticesChangedFrom(mesh, before), kTrialUntangleRings);
 }
 
 SurfaceFaults UntangleNewFaults(const RunContext& run, TinMesh* mesh, const TinMesh& before_mesh,

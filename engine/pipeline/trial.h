@@ -40,8 +40,9 @@ struct SurfaceFaults {
 };
 SurfaceFaults CountSurfaceFaults(const RunContext& run, const TinMesh& mesh);
 
-// The vertices a trial's untangling may move: those the proposal moved from `before`
-// (same vertex count), grown by kTrialUntangleRings edge rings. The untangling grows its
+// The vertices a trial's untangling may move: those the proposal changed from `before`
+// (moved, inserted, or on a face it split or flipped: VerticesChangedFrom), grown by
+// kTrialUntangleRings edge rings. The untangling grows its
 // regions by at most 4 rings from the corners of a crossing face (UntangleSelfIntersections
 // with 4 rounds), and a new crossing has a face with a moved corner: 8 rings hold them with
 // room, and keep the trial's re-adjustment to the windows around the proposal instead of

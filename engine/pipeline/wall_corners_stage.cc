@@ -4,7 +4,9 @@
 #include <iomanip>
 #include <sstream>
 #include <utility>
+#include <vector>
 
+#include "engine/pipeline/local_readjustment.h"
 #include "engine/pipeline/trial.h"
 #include "mesh/local_ops.h"
 #include "mesh/surface_validity.h"
@@ -13,15 +15,30 @@
 namespace facets {
 namespace {
 
-// Splits the stretched edges at G1 midpoints and adjusts the level again; a crumpled
-// wall can make triangles cross there: untangled, or the level keeps its triangles.
-void SplitStretchedEdges(const RunContext& run, LevelPass* pass) {
+// The corners' bands grown by this many edge rings: where the stretched edges are split
+// before the corners are laid (a band reaches 1.5 edges from its line; the split edges
+// are those of the walls' faces beside it).
+constexpr int kCornerSplitRings = 3;
+
+std::vector<bool> AroundCorners(const TinMesh& mesh, const WallCornerSearch& search) {
+  std::vector<bool> near(mesh.n_vertices(), false);
+  for (const WallCorner& corner : search.corners) {
+    for (int v : corner.band) near[v] = true;
+  }
+  return GrowByRings(mesh, std::move(near), kCornerSplitRings);
+}
+
+// Splits the stretched edges near the corners at G1 midpoints and adjusts the windows
+// around the splits again; a crumpled wall can make triangles cross there: untangled
+// around the splits, or the level keeps its triangles. True when edges were split.
+bool SplitStretchedEdgesNear(const RunContext& run, LevelPass* pass, const std::vector<bool>& near) {
   TinMesh& mesh = *pass->mesh;
   QualityOptions quality;
   quality.target_edge_length = run.EdgeLength(pass->level);
   quality.max_rounds = 2;
-  if (CountLongEdges(mesh, quality) == 0) return;
-  const TinMesh before_split = mesh;
+  quality.near = &near;
+  if (CountLongEdges(mesh, quality) == 0) return false;
+  TinMesh before_split = mesh;
   auto count_crossing = [&run](const TinMesh& surface) {
     const auto clock = run.profile->Part("crossing counts");
     return CountSelfIntersections(surface);
@@ -32,27 +49,26 @@ void SplitStretchedEdges(const RunContext& run, LevelPass* pass) {
   int crossing_after = count_crossing(mesh);
   if (crossing_after > crossing_before && run.options.fold_lips_untangle_rounds > 0) {
     const auto clock = run.profile->Part("untangling");
-    crossing_after = UntangleSelfIntersections(&mesh, run.options.fold_lips_untangle_rounds).pairs_after;
+    const std::vector<bool> movable = TrialNeighbourhood(mesh, before_split);
+    crossing_after = UntangleSelfIntersections(&mesh, run.options.fold_lips_untangle_rounds, &movable).pairs_after;
     UpdateVertexNormals(&mesh);
   }
   if (crossing_after > crossing_before) {
-    mesh = before_split;
+    mesh = std::move(before_split);
     run.Say(pass->Prefix() + " corners: splitting the stretched edges made " +
             std::to_string(crossing_after - crossing_before) + " crossing pairs, left");
-    return;
+    return false;
   }
   pass->report.corner_splits = split.splits;
-  run.Say(pass->Prefix() + " corners: " + std::to_string(split.splits) + " stretched edges split, " +
-          std::to_string(mesh.n_faces()) + " faces; adjusted again");
-  const auto clock = run.profile->Part("level re-adjustment");
-  // One sweep with the margins held: the level was adjusted just before the splits, so
-  // the neighbours' values are already converged ones (the level's own first sweep frees
-  // the margins because its start is not).
-  LevelWindowOptions windows = run.options.windows;
-  windows.sweeps = 1;
-  windows.free_margin_sweeps = 0;
-  pass->adjusted = AdjustLevelInWindows(&mesh, run.images.ForWindows(pass->level), pass->adjustment,
-                                        windows, pass->Finest(run), run.options.progress);
+  const auto clock = run.profile->Part("split re-adjustment");
+  LocalReadjustment local = ReadjustAroundSplits(
+      &mesh, before_split, pass->adjusted, run.options.wall_corners_local_rings, run.images.ForWindows(pass->level),
+      pass->adjustment, run.options.windows, pass->Finest(run), run.options.progress);
+  run.Say(pass->Prefix() + " corners: " + std::to_string(split.splits) + " stretched edges split near them, " +
+          std::to_string(mesh.n_faces()) + " faces; adjusted again in " + std::to_string(local.windows) +
+          " local windows");
+  pass->adjusted = std::move(local.level);
+  return true;
 }
 
 WallCornerOptions CornerOptions(const RunContext& run, const LevelPass& pass) {
@@ -122,10 +138,14 @@ void TryCorner(const RunContext& run, LevelPass* pass, const WallCorner& corner,
 }  // namespace
 
 void LayWallCorners(const RunContext& run, LevelPass* pass) {
-  SplitStretchedEdges(run, pass);
   const WallCornerOptions corner_options = CornerOptions(run, *pass);
-  if (run.options.creases_start) run.options.creases_start(pass->level, *pass->mesh);
+  // The creases of the level as it stands say where its stretched edges are split; they
+  // are then found again on the split level.
   WallCornerSearch search = FindWallCorners(*pass->mesh, corner_options);
+  if (!search.corners.empty() && SplitStretchedEdgesNear(run, pass, AroundCorners(*pass->mesh, search))) {
+    search = FindWallCorners(*pass->mesh, corner_options);
+  }
+  if (run.options.creases_start) run.options.creases_start(pass->level, *pass->mesh);
   // Vertical corners first (their bands end half an edge above the foot and below the
   // eave), then feet and eaves.
   std::stable_sort(search.corners.begin(), search.corners.end(),
