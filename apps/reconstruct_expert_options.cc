@@ -186,7 +186,8 @@ void BindNormalSearch(const OptionBinder& bind, ReconstructionOptions& options) 
              "finest pyramid level with search rounds")
       ->check(CLI::Range(0, 20));
   bind.Value("--normal-search-tolerance", options.normal_search_tolerance,
-             "a round is kept when sigma0 stays below (1 + this) x sigma0 before it (0 = only when it drops)")
+             "a round is kept when sigma0 stays below (1 + this) x sigma0 before it (0 = only when it drops; "
+             "1 = always, not judged)")
       ->check(CLI::Range(0.0, 1.0));
   bind.Value("--normal-search-local-rings", options.normal_search_local_rings,
              "rounds re-adjust only the windows within this many edge rings of the vertices that moved (-1 = the "

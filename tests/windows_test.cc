@@ -192,7 +192,9 @@ TEST(Windows, PartitionOfAFaceSubsetCoversItOnce) {
 // patch and one ring around it run again. The patch comes back onto the level's surface
 // (along its normal) within 3 sigma; every vertex outside those windows' cores keeps its
 // position and its per-vertex values to the bit; the local windows' sigma0 comes back to
-// its value before the push, and the level's pooled sigma0 stays.
+// its value before the push, and the level's pooled sigma0 stays. Without the probes (a
+// trial kept whatever sigma0 does) the run is the same to the bit, and the faces outside
+// the local cores keep their parts of the level's fit.
 // The gable adjusted in windows of at most 250 faces, the start of the local tests.
 struct AdjustedGable {
   WindowsGable gable;
@@ -254,8 +256,11 @@ TEST(Windows, ALocalReadjustmentBringsBackAPushedPatchAndLeavesTheRestAlone) {
   const std::vector<MeshWindow> scope =
       PartitionFacesIntoWindows(mesh, FacesNearVertices(mesh, pushed, 1), windows.partition);
   const WindowImages all = [&](const Eigen::AlignedBox3d&, ImageStorage*) { return gable.loaded.images; };
+  TinMesh unprobed_mesh = mesh;
   const LocalReadjustment local =
-      ReadjustAroundMovedVertices(&mesh, adjusted, level, 1, all, adjustment, windows, true, {});
+      ReadjustAroundMovedVertices(&mesh, adjusted, level, 1, all, adjustment, windows, true, true, {});
+  const LocalReadjustment unprobed =
+      ReadjustAroundMovedVertices(&unprobed_mesh, adjusted, level, 1, all, adjustment, windows, true, false, {});
   std::cout << count << " vertices pushed 0.3 m; " << local.windows << " local windows of "
             << level.windows.size() << "; their sigma0 " << local.sigma0_before << " before the push, "
             << local.sigma0_after << " after; level " << level.summary.sigma0 << " -> "
@@ -268,6 +273,33 @@ TEST(Windows, ALocalReadjustmentBringsBackAPushedPatchAndLeavesTheRestAlone) {
   EXPECT_NEAR(local.sigma0_after, local.sigma0_before, 0.01 * local.sigma0_before);
   EXPECT_NEAR(local.level.summary.sigma0, level.summary.sigma0, 0.1 * level.summary.sigma0);
   EXPECT_EQ(local.level.windows.size(), level.windows.size());
+  // The level's fit from its faces' parts: the sum of the windows' before, the local
+  // windows' in place of theirs after.
+  EXPECT_NEAR(level.face_fit.Sigma0(), level.summary.sigma0, 1e-9 * level.summary.sigma0);
+  EXPECT_NEAR(level.face_fit.TotalRedundancy(), static_cast<double>(level.summary.redundancy), 1e-6);
+  std::vector<int> core_faces;
+  std::vector<char> in_core(mesh.n_faces(), 0);
+  for (const MeshWindow& w : scope) {
+    for (int f : w.core_faces) in_core[f] = 1, core_faces.push_back(f);
+  }
+  int parts_kept = 0;
+  for (size_t f = 0; f < in_core.size(); ++f) {
+    if (in_core[f]) continue;
+    EXPECT_EQ(local.level.face_fit.vpv[f], level.face_fit.vpv[f]) << "face " << f;
+    ++parts_kept;
+  }
+  EXPECT_GT(parts_kept, static_cast<int>(mesh.n_faces() / 3));
+  EXPECT_EQ(local.level.summary.sigma0, local.level.face_fit.Sigma0());
+  EXPECT_TRUE(local.probed);
+  EXPECT_FALSE(unprobed.probed);
+  EXPECT_EQ(unprobed.windows, local.windows);
+  EXPECT_EQ(unprobed.level.summary.sigma0, local.level.summary.sigma0);
+  for (auto vh : mesh.vertices()) ASSERT_EQ(unprobed_mesh.point(vh), mesh.point(vh)) << "vertex " << vh.idx();
+  // Unprobed, the windows' figures are their faces' parts: converged runs before and after.
+  std::cout << "unprobed: the local cores' fit " << unprobed.sigma0_before << " before, " << unprobed.sigma0_after
+            << " after\n";
+  EXPECT_NEAR(unprobed.sigma0_before, level.face_fit.Sigma0(&core_faces), 1e-12);
+  EXPECT_NEAR(unprobed.sigma0_after, unprobed.sigma0_before, 0.02 * unprobed.sigma0_before);
 
   std::vector<char> owned(mesh.n_vertices(), 0);
   for (const MeshWindow& w : scope) {
@@ -333,7 +365,14 @@ TEST(Windows, ALocalReadjustmentAfterSplitsCoversTheInsertedVertices) {
             << " after; level " << run.level.summary.sigma0 << " -> " << local.level.summary.sigma0 << "\n";
   EXPECT_GT(local.windows, 0);
   EXPECT_LT(local.windows, static_cast<int>(run.level.windows.size()));
+  // Not probed (the splits are not judged): the cores' parts of the level's fit before and
+  // after, the inserted faces' from the local windows.
+  EXPECT_FALSE(local.probed);
   EXPECT_NEAR(local.sigma0_after, local.sigma0_before, 0.02 * local.sigma0_before);
+  ASSERT_EQ(local.level.face_fit.redundancy.size(), mesh.n_faces());
+  for (size_t f = run.adjusted.n_faces(); f < mesh.n_faces(); ++f) {
+    EXPECT_GT(local.level.face_fit.redundancy[f], 0.0) << "inserted face " << f;
+  }
   const WindowReport& s = local.level.summary;
   ASSERT_EQ(s.vertex_sigma.size(), mesh.n_vertices());
   ASSERT_EQ(s.vertex_views.size(), mesh.n_vertices());

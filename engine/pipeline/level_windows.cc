@@ -8,6 +8,7 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <numeric>
 #include <stdexcept>
 
 #include "engine/pipeline/window_occluders.h"
@@ -246,6 +247,27 @@ void AddToSummary(const WindowReport& r, WindowReport* s, double* pooled) {
   if (r.iterations.size() > s->iterations.size()) s->iterations = r.iterations;
 }
 
+// Each core face's part of its window's fit (FaceFit); a local run starts from the
+// previous adjustment's parts.
+void ShareFitAmongCoreFaces(const std::vector<MeshWindow>& windows, const std::vector<WindowResult>& results,
+                            const LocalScope* local, int num_faces, FaceFit* fit) {
+  if (local) *fit = local->previous->face_fit;
+  fit->vpv.resize(num_faces, 0.0);
+  fit->redundancy.resize(num_faces, 0.0);
+  fit->observations.resize(num_faces, 0.0);
+  for (size_t w = 0; w < windows.size(); ++w) {
+    const WindowReport& r = results[w].report;
+    const bool observed = results[w].observed;
+    const double faces = static_cast<double>(std::max<size_t>(1, windows[w].core_faces.size()));
+    const double redundancy = observed ? static_cast<double>(r.redundancy) : 0.0;
+    for (int f : windows[w].core_faces) {
+      fit->vpv[f] = observed ? r.sigma0 * r.sigma0 * redundancy / faces : 0.0;
+      fit->redundancy[f] = redundancy / faces;
+      fit->observations[f] = observed ? static_cast<double>(r.observations) / faces : 0.0;
+    }
+  }
+}
+
 // The level's summary and per-vertex values from its windows (LevelAdjustment::summary).
 void Summarise(const std::vector<MeshWindow>& windows, const std::vector<WindowResult>& results,
                const LocalScope* local, int num_vertices, LevelAdjustment* level) {
@@ -372,6 +394,26 @@ void GatherLevelGrey(const TinMesh& mesh, const AdjustmentOptions& adjustment,
 
 }  // namespace
 
+double FaceFit::Sigma0(const std::vector<int>* faces) const {
+  double vpv_sum = 0.0, redundancy_sum = 0.0;
+  auto add = [&](size_t f) {
+    vpv_sum += vpv[f];
+    redundancy_sum += redundancy[f];
+  };
+  if (faces) {
+    for (int f : *faces) {
+      if (f >= 0 && static_cast<size_t>(f) < vpv.size()) add(f);
+    }
+  } else {
+    for (size_t f = 0; f < vpv.size(); ++f) add(f);
+  }
+  return redundancy_sum > 0.0 && vpv_sum > 0.0 ? std::sqrt(vpv_sum / redundancy_sum) : 0.0;
+}
+
+double FaceFit::TotalRedundancy() const { return std::accumulate(redundancy.begin(), redundancy.end(), 0.0); }
+
+double FaceFit::TotalObservations() const { return std::accumulate(observations.begin(), observations.end(), 0.0); }
+
 void LevelWindowOptions::Check() const {
   partition.Check();
   if (sweeps < 1) throw std::invalid_argument("windows: sweeps must be >= 1");
@@ -438,6 +480,7 @@ LevelAdjustment AdjustLevelInWindows(TinMesh* mesh, const WindowImages& images,
   UpdateVertexNormals(mesh);
 
   Summarise(windows, results, local, static_cast<int>(mesh->n_vertices()), &level);
+  ShareFitAmongCoreFaces(windows, results, local, static_cast<int>(mesh->n_faces()), &level.face_fit);
   if (keep_grey) GatherLevelGrey(*mesh, adjustment, results, face_window, local, &level);
   level.summary.seconds_total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return level;

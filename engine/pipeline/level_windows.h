@@ -39,6 +39,20 @@ struct LevelWindowOptions {
   void Check() const;
 };
 
+// Each face's part of a level's fit: the window whose core holds the face (its last run)
+// gives each of its core faces an equal part of its sigma0^2 r, redundancy and
+// observations; a face in no observed core has none. The parts of all faces sum to the
+// level's pooled figures. A local run (LocalScope) replaces the parts of its cores' faces
+// and keeps the others', so the level's fit stays defined over the whole level without
+// running its other windows again.
+struct FaceFit {
+  std::vector<double> vpv, redundancy, observations;
+  // sqrt(sum vpv / sum redundancy) over `faces` (every face when null); 0 without redundancy.
+  double Sigma0(const std::vector<int>* faces = nullptr) const;
+  double TotalRedundancy() const;
+  double TotalObservations() const;
+};
+
 struct LevelAdjustment {
   // Summary of the level: converged = every window converged; sigma0 pooled over the
   // windows (sqrt of sum sigma0^2 r / sum r, margins counted in every window that
@@ -48,6 +62,7 @@ struct LevelAdjustment {
   std::vector<WindowReport> windows;  // in window order (last sweep)
   std::vector<int> window_core_faces;
   int groups = 0;
+  FaceFit face_fit;
   // Of the whole level when requested (keep_grey): the tessellation of the final
   // surface (creases as DetectCreaseEdges finds them) and the object grey values per
   // node, each face's from the window whose core holds it.

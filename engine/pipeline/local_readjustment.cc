@@ -23,18 +23,19 @@ LocalScope ScopeAround(const TinMesh& mesh, const std::vector<bool>& flagged, in
   return scope;
 }
 
-// `after` adjusted in the windows of `scope`, judged against `before` in those of
-// `scope_before` (the same windows when the topology is the same).
-LocalReadjustment ReadjustInScope(TinMesh* mesh, const TinMesh& before, const LevelAdjustment& adjusted,
-                                  const LocalScope& scope, const LocalScope& scope_before, const WindowImages& images,
-                                  const AdjustmentOptions& adjustment, const LevelWindowOptions& options,
-                                  bool keep_grey, const std::function<void(const std::string&)>& progress) {
-  LocalReadjustment result;
-  result.windows = static_cast<int>(scope.windows.size());
-  // The windows' fit before the search and after their adjustment, each by one
-  // linearisation of a copy with the same windows: the first linearisation's sigma0
-  // differs from a converged one (on a level with robust weights, the V-cycle's, by 15-20 %
-  // on the rendered block), so the round is judged by two measures of the same kind.
+// The faces of the windows' cores.
+std::vector<int> CoreFaces(const LocalScope& scope) {
+  std::vector<int> faces;
+  for (const MeshWindow& w : scope.windows) faces.insert(faces.end(), w.core_faces.begin(), w.core_faces.end());
+  return faces;
+}
+
+// The windows' fit on `surface` from one linearisation of a copy with the same windows:
+// the first linearisation's sigma0 differs from a converged one (on a level with robust
+// weights, the V-cycle's, by 15-20 % on the rendered block), so a judged trial is judged by
+// two measures of the same kind.
+WindowReport Probe(const TinMesh& surface, const LocalScope& scope, const WindowImages& images,
+                   const AdjustmentOptions& adjustment, const LevelWindowOptions& options) {
   AdjustmentOptions probe_adjustment = adjustment;
   probe_adjustment.max_iterations = 1;
   probe_adjustment.compute_precision = false;
@@ -42,11 +43,22 @@ LocalReadjustment ReadjustInScope(TinMesh* mesh, const TinMesh& before, const Le
   LevelWindowOptions probe_options = options;
   probe_options.sweeps = 1;
   probe_options.crease_second_pass = false;
-  auto probe = [&](const TinMesh& surface, const LocalScope& windows) {
-    TinMesh copy = surface;
-    return AdjustLevelInWindows(&copy, images, probe_adjustment, probe_options, false, nullptr, &windows).summary;
-  };
-  const WindowReport was = probe(before, scope_before);
+  TinMesh copy = surface;
+  return AdjustLevelInWindows(&copy, images, probe_adjustment, probe_options, false, nullptr, &scope).summary;
+}
+
+// `mesh` adjusted in the windows of `scope` (`before`: the surface `adjusted` left, of
+// the same topology when probed).
+LocalReadjustment ReadjustInScope(TinMesh* mesh, const TinMesh& before, const LevelAdjustment& adjusted,
+                                  const LocalScope& scope, const WindowImages& images,
+                                  const AdjustmentOptions& adjustment, const LevelWindowOptions& options,
+                                  bool keep_grey, bool probed,
+                                  const std::function<void(const std::string&)>& progress) {
+  LocalReadjustment result;
+  result.windows = static_cast<int>(scope.windows.size());
+  result.probed = probed;
+  WindowReport was;
+  if (probed) was = Probe(before, scope, images, adjustment, options);
   // One sweep: the local windows start from the adjusted level with their margins held at
   // its values (LocalScope), so a second sweep moves little but the seams between them;
   // on the rendered blocks at level 1 it cost 34-41 % of the run's CPU time for walls
@@ -54,23 +66,23 @@ LocalReadjustment ReadjustInScope(TinMesh* mesh, const TinMesh& before, const Le
   LevelWindowOptions local_options = options;
   local_options.sweeps = 1;
   result.level = AdjustLevelInWindows(mesh, images, adjustment, local_options, keep_grey, progress, &scope);
-  const WindowReport after = probe(*mesh, scope);
-  result.sigma0_before = was.sigma0;
-  result.sigma0_after = after.sigma0;
+  if (probed) {
+    result.sigma0_before = was.sigma0;
+    result.sigma0_after = Probe(*mesh, scope, images, adjustment, options).sigma0;
+  } else {
+    const std::vector<int> cores = CoreFaces(scope);
+    result.sigma0_before = adjusted.face_fit.Sigma0(&cores);
+    result.sigma0_after = result.level.face_fit.Sigma0(&cores);
+  }
 
-  // The level's summary: the local windows' share replaced, their converged sigma0 before
-  // taken as the one after scaled by the probes' ratio.
-  const WindowReport& full = adjusted.summary;
+  // The level's summary: sigma0, redundancy and observations of the whole level from the
+  // faces' parts, the local windows' in place of those before.
+  WindowReport merged = adjusted.summary;
   WindowReport& now = result.level.summary;
-  const double ratio = after.sigma0 > 0.0 ? was.sigma0 / after.sigma0 : 1.0;
-  const double share_before = now.sigma0 * ratio * now.sigma0 * ratio * static_cast<double>(was.redundancy);
-  const double redundancy = static_cast<double>(full.redundancy - was.redundancy + now.redundancy);
-  const double pooled = full.sigma0 * full.sigma0 * static_cast<double>(full.redundancy) - share_before +
-                        now.sigma0 * now.sigma0 * static_cast<double>(now.redundancy);
-  WindowReport merged = full;
-  merged.sigma0 = redundancy > 0 && pooled > 0 ? std::sqrt(pooled / redundancy) : now.sigma0;
-  merged.redundancy = static_cast<long long>(redundancy);
-  merged.observations = full.observations - was.observations + now.observations;
+  const FaceFit& fit = result.level.face_fit;
+  merged.sigma0 = fit.Sigma0();
+  merged.redundancy = std::llround(fit.TotalRedundancy());
+  merged.observations = std::llround(fit.TotalObservations());
   merged.vertex_sigma = std::move(now.vertex_sigma);
   merged.vertex_views = std::move(now.vertex_views);
   merged.vertex_flags = std::move(now.vertex_flags);
@@ -87,7 +99,7 @@ LocalReadjustment ReadjustAroundMovedVertices(TinMesh* mesh, const TinMesh& befo
                                               const LevelAdjustment& adjusted, int rings,
                                               const WindowImages& images,
                                               const AdjustmentOptions& adjustment,
-                                              const LevelWindowOptions& options, bool keep_grey,
+                                              const LevelWindowOptions& options, bool keep_grey, bool probed,
                                               const std::function<void(const std::string&)>& progress) {
   if (before.n_vertices() != mesh->n_vertices() || before.n_faces() != mesh->n_faces()) {
     throw std::invalid_argument("local re-adjustment: the surface before must have the same topology");
@@ -96,7 +108,7 @@ LocalReadjustment ReadjustAroundMovedVertices(TinMesh* mesh, const TinMesh& befo
   for (auto vh : mesh->vertices()) moved[vh.idx()] = mesh->point(vh) != before.point(vh);
   const LocalScope scope = ScopeAround(*mesh, moved, rings, &adjusted, options);
   if (scope.windows.empty()) return {};
-  return ReadjustInScope(mesh, before, adjusted, scope, scope, images, adjustment, options, keep_grey, progress);
+  return ReadjustInScope(mesh, before, adjusted, scope, images, adjustment, options, keep_grey, probed, progress);
 }
 
 LocalReadjustment ReadjustAroundSplits(TinMesh* mesh, const TinMesh& before, const LevelAdjustment& adjusted,
@@ -113,8 +125,7 @@ LocalReadjustment ReadjustAroundSplits(TinMesh* mesh, const TinMesh& before, con
   s.vertex_flags.resize(mesh->n_vertices(), kVertexFewViews);
   const LocalScope scope = ScopeAround(*mesh, changed, rings, &extended, options);
   if (scope.windows.empty()) return {};
-  const LocalScope scope_before = ScopeAround(before, changed, rings, &adjusted, options);
-  return ReadjustInScope(mesh, before, extended, scope, scope_before, images, adjustment, options, keep_grey, progress);
+  return ReadjustInScope(mesh, before, extended, scope, images, adjustment, options, keep_grey, false, progress);
 }
 
 }  // namespace facets

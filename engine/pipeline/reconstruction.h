@@ -142,8 +142,9 @@ struct ReconstructionOptions {
   int normal_search_last_level = 0;
   // After a level's adjustment: up to normal_search_rounds rounds of search and trial on
   // the levels normal_search_rounds_last_level and coarser (not the coarsest), kept unless
-  // sigma0 rises by more than normal_search_tolerance (a share), over the windows within
-  // normal_search_local_rings rings of the moved vertices (-1: the whole level).
+  // sigma0 rises by more than normal_search_tolerance (a share; 1: kept, not judged,
+  // kKeptWhateverSigma0), over the windows within normal_search_local_rings rings of the
+  // moved vertices (-1: the whole level).
   int normal_search_rounds = 2;
   int normal_search_rounds_last_level = 1;
   double normal_search_tolerance = 0.0;

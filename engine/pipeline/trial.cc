@@ -9,21 +9,25 @@
 namespace facets {
 
 std::string TrialVerdict::Brief() const {
+  std::string where = local_windows > 0 ? std::to_string(local_windows) + " local windows" : std::string();
+  if (!judged) where += std::string(where.empty() ? "" : ", ") + "not judged";
   return "sigma0 " + std::to_string(now_sigma0) + " against " + std::to_string(was_sigma0) +
-         (local_windows > 0 ? " (" + std::to_string(local_windows) + " local windows)" : "");
+         (where.empty() ? "" : " (" + where + ")");
 }
 
 TrialVerdict JudgeProposal(const RunContext& run, LevelPass* pass, TinMesh before, int local_rings,
                            double tolerance) {
   const auto clock = run.profile->Part("trial re-adjustment");
   TrialVerdict verdict;
+  verdict.judged = tolerance < kKeptWhateverSigma0;
   verdict.was_sigma0 = pass->adjusted.summary.sigma0;
   const bool keep_grey = pass->Finest(run);
   LevelAdjustment again;
   if (local_rings >= 0) {
     LocalReadjustment local =
         ReadjustAroundMovedVertices(pass->mesh, before, pass->adjusted, local_rings, run.images.ForWindows(pass->level),
-                                    pass->adjustment, run.options.windows, keep_grey, run.options.progress);
+                                    pass->adjustment, run.options.windows, keep_grey, verdict.judged,
+                                    run.options.progress);
     verdict.ran = local.windows > 0;
     again = std::move(local.level);
     verdict.was_sigma0 = local.sigma0_before;
@@ -34,7 +38,7 @@ TrialVerdict JudgeProposal(const RunContext& run, LevelPass* pass, TinMesh befor
                                  run.options.windows, keep_grey, run.options.progress);
     verdict.now_sigma0 = again.summary.sigma0;
   }
-  verdict.kept = verdict.ran && verdict.now_sigma0 < verdict.was_sigma0 * (1.0 + tolerance);
+  verdict.kept = verdict.ran && (!verdict.judged || verdict.now_sigma0 < verdict.was_sigma0 * (1.0 + tolerance));
   if (verdict.kept) {
     pass->adjusted = std::move(again);
   } else {

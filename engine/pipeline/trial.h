@@ -5,6 +5,8 @@
 // The level is adjusted again as a whole (local_rings -1, judged by the level's sigma0)
 // or only in the windows over the faces within local_rings edge rings of the moved
 // vertices (judged by their own sigma0 before and after, engine/pipeline/local_readjustment.h).
+// A proposal kept whatever sigma0 does (tolerance kKeptWhateverSigma0) is adjusted again
+// the same way but not judged.
 #pragma once
 
 #include <vector>
@@ -13,8 +15,15 @@
 
 namespace facets {
 
+// A tolerance at which a proposal is kept whatever sigma0 does: its local re-adjustment
+// runs without the two probes (each one linearisation of its windows), and the verdict
+// gives the level's fit over the local windows' core faces before and after
+// (LevelAdjustment::face_fit).
+constexpr double kKeptWhateverSigma0 = 1.0;
+
 struct TrialVerdict {
   bool ran = true;         // false: no window to adjust (nothing moved)
+  bool judged = true;      // false: kept whatever sigma0 does
   bool kept = false;
   double was_sigma0 = 0.0;
   double now_sigma0 = 0.0;
@@ -25,8 +34,8 @@ struct TrialVerdict {
 };
 
 // *pass.mesh holds the proposal, `before` the surface it replaced. Kept when sigma0
-// after < sigma0 before x (1 + tolerance): pass.adjusted becomes the new adjustment;
-// else *pass.mesh is `before` again.
+// after < sigma0 before x (1 + tolerance), or whenever tolerance >= kKeptWhateverSigma0:
+// pass.adjusted becomes the new adjustment; else *pass.mesh is `before` again.
 TrialVerdict JudgeProposal(const RunContext& run, LevelPass* pass, TinMesh before, int local_rings,
                            double tolerance);
 
