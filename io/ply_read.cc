@@ -1,13 +1,10 @@
 // ReadPly: the PLY header, then every element of the body (ascii or binary, either
 // byte order) into MeshData; see io/ply_io.h for what is read.
 #include <algorithm>
-#include <bit>
 #include <cctype>
-#include <charconv>
 #include <climits>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <locale>
@@ -18,56 +15,10 @@
 
 #include "io/input_file.h"
 #include "io/ply_io.h"
+#include "io/ply_values.h"
 
 namespace facets {
 namespace {
-
-static_assert(std::endian::native == std::endian::little,
-              "the binary PLY reader assumes a little-endian host");
-
-enum class PlyType { kInt8, kUint8, kInt16, kUint16, kInt32, kUint32, kFloat32, kFloat64 };
-
-bool PlyTypeFromName(const std::string& name, PlyType* type) {
-  static const std::pair<const char*, PlyType> kNames[] = {
-      {"char", PlyType::kInt8},      {"int8", PlyType::kInt8},
-      {"uchar", PlyType::kUint8},    {"uint8", PlyType::kUint8},
-      {"short", PlyType::kInt16},    {"int16", PlyType::kInt16},
-      {"ushort", PlyType::kUint16},  {"uint16", PlyType::kUint16},
-      {"int", PlyType::kInt32},      {"int32", PlyType::kInt32},
-      {"uint", PlyType::kUint32},    {"uint32", PlyType::kUint32},
-      {"float", PlyType::kFloat32},  {"float32", PlyType::kFloat32},
-      {"double", PlyType::kFloat64}, {"float64", PlyType::kFloat64},
-  };
-  for (const auto& [n, t] : kNames) {
-    if (name == n) {
-      *type = t;
-      return true;
-    }
-  }
-  return false;
-}
-
-size_t PlyTypeSize(PlyType type) {
-  switch (type) {
-    case PlyType::kInt8:
-    case PlyType::kUint8:
-      return 1;
-    case PlyType::kInt16:
-    case PlyType::kUint16:
-      return 2;
-    case PlyType::kInt32:
-    case PlyType::kUint32:
-    case PlyType::kFloat32:
-      return 4;
-    case PlyType::kFloat64:
-      return 8;
-  }
-  return 0;
-}
-
-bool PlyTypeIsInteger(PlyType type) {
-  return type != PlyType::kFloat32 && type != PlyType::kFloat64;
-}
 
 struct PlyProperty {
   std::string name;
@@ -83,86 +34,6 @@ struct PlyElement {
 };
 
 enum class PlyFormat { kAscii, kBinaryLittle, kBinaryBig };
-
-[[noreturn]] void Fail(const std::string& source, const std::string& what) {
-  throw std::runtime_error(source + ": " + what);
-}
-
-// A value read from the file for a message, shortest exact form: "-1", "4e+09", "nan".
-std::string FormatNumber(double value) {
-  char text[32];
-  return std::string(text, std::to_chars(text, text + sizeof(text), value).ptr);
-}
-
-template <typename T>
-double Load(const unsigned char* bytes) {
-  T value;
-  std::memcpy(&value, bytes, sizeof(T));
-  return static_cast<double>(value);
-}
-
-// Reads one scalar of `type` at `*cursor`, advancing it; fails (naming `context`) when
-// the data ends first. Every PLY scalar fits a double exactly (32-bit integers too).
-double ReadBinaryScalar(const char** cursor, const char* end, PlyType type, bool swap,
-                        const std::string& source, const std::string& context) {
-  const size_t size = PlyTypeSize(type);
-  if (static_cast<size_t>(end - *cursor) < size) Fail(source, "truncated binary data in " + context);
-  unsigned char bytes[8];
-  std::memcpy(bytes, *cursor, size);
-  *cursor += size;
-  if (swap) std::reverse(bytes, bytes + size);
-  switch (type) {
-    case PlyType::kInt8: return Load<int8_t>(bytes);
-    case PlyType::kUint8: return Load<uint8_t>(bytes);
-    case PlyType::kInt16: return Load<int16_t>(bytes);
-    case PlyType::kUint16: return Load<uint16_t>(bytes);
-    case PlyType::kInt32: return Load<int32_t>(bytes);
-    case PlyType::kUint32: return Load<uint32_t>(bytes);
-    case PlyType::kFloat32: return Load<float>(bytes);
-    case PlyType::kFloat64: return Load<double>(bytes);
-  }
-  return 0.0;
-}
-
-// Splits an ascii data line into numbers; locale-independent (std::from_chars).
-class AsciiLine {
- public:
-  AsciiLine(const std::string& line, const std::string& source, size_t line_number)
-      : line_(line), source_(source), line_number_(line_number) {}
-
-  double Next(const std::string& context) {
-    while (pos_ < line_.size() && std::isspace(static_cast<unsigned char>(line_[pos_]))) ++pos_;
-    if (pos_ >= line_.size()) {
-      Fail(source_, "line " + std::to_string(line_number_) + ": too few values for " + context);
-    }
-    size_t start = pos_;
-    while (pos_ < line_.size() && !std::isspace(static_cast<unsigned char>(line_[pos_]))) ++pos_;
-    const char* first = line_.data() + start;
-    const char* last = line_.data() + pos_;
-    if (*first == '+') ++first;
-    double value = 0.0;
-    const auto [ptr, ec] = std::from_chars(first, last, value);
-    if (ec != std::errc() || ptr != last) {
-      Fail(source_, "line " + std::to_string(line_number_) + ": '" +
-                        line_.substr(start, pos_ - start) + "' is not a number (" + context + ")");
-    }
-    return value;
-  }
-
-  // An upper bound of the values left on the line (each needs a character and a space).
-  size_t Left() const { return (line_.size() - std::min(pos_, line_.size()) + 1) / 2; }
-
-  bool AtEnd() {
-    while (pos_ < line_.size() && std::isspace(static_cast<unsigned char>(line_[pos_]))) ++pos_;
-    return pos_ >= line_.size();
-  }
-
- private:
-  const std::string& line_;
-  const std::string& source_;
-  size_t line_number_;
-  size_t pos_ = 0;
-};
 
 // Which MeshData field a vertex property fills.
 enum class VertexSlot { kSkip, kX, kY, kZ, kNx, kNy, kNz, kRed, kGreen, kBlue, kSigma, kViews };
@@ -197,10 +68,10 @@ void ReadFacetsComment(std::istringstream& ls, const std::string& src, const std
   ls >> key;
   if (key == "facets_origin") {
     for (int c = 0; c < 3; ++c) ls >> (*origin)[c];
-    if (!ls || !origin->allFinite()) Fail(src, where + "malformed facets_origin comment");
+    if (!ls || !origin->allFinite()) FailPly(src, where + "malformed facets_origin comment");
   } else if (key == "facets_crs") {
     std::getline(ls >> std::ws, *crs);
-    if (crs->empty()) Fail(src, where + "empty facets_crs comment");
+    if (crs->empty()) FailPly(src, where + "empty facets_crs comment");
   }
 }
 
@@ -265,7 +136,7 @@ ElementLayout LayoutOf(const PlyElement& element, const std::string& src) {
     }
     if (!layout.Has(VertexSlot::kX) || !layout.Has(VertexSlot::kY) ||
         !layout.Has(VertexSlot::kZ)) {
-      Fail(src, "vertex element lacks x, y or z");
+      FailPly(src, "vertex element lacks x, y or z");
     }
     layout.want_normals = layout.Has(VertexSlot::kNx) && layout.Has(VertexSlot::kNy) &&
                           layout.Has(VertexSlot::kNz);
@@ -276,13 +147,13 @@ ElementLayout LayoutOf(const PlyElement& element, const std::string& src) {
     for (size_t p = 0; p < element.properties.size(); ++p) {
       const PlyProperty& prop = element.properties[p];
       if (prop.is_list && (prop.name == "vertex_indices" || prop.name == "vertex_index")) {
-        if (!PlyTypeIsInteger(prop.type)) Fail(src, "face vertex indices are not integers");
+        if (!PlyTypeIsInteger(prop.type)) FailPly(src, "face vertex indices are not integers");
         layout.face_list = static_cast<int>(p);
       } else if (!prop.is_list && (prop.name == "label" || prop.name == "region")) {
         layout.face_label = static_cast<int>(p);
       }
     }
-    if (layout.face_list < 0) Fail(src, "face element has no vertex_indices list");
+    if (layout.face_list < 0) FailPly(src, "face element has no vertex_indices list");
   }
   return layout;
 }
@@ -292,7 +163,7 @@ PlyFormat PlyFormatFromName(const std::string& name, const std::string& src,
   if (name == "ascii") return PlyFormat::kAscii;
   if (name == "binary_little_endian") return PlyFormat::kBinaryLittle;
   if (name == "binary_big_endian") return PlyFormat::kBinaryBig;
-  Fail(src, where + "unknown PLY format '" + name + "'");
+  FailPly(src, where + "unknown PLY format '" + name + "'");
 }
 
 // "property TYPE NAME" or "property list COUNT_TYPE ITEM_TYPE NAME" after the keyword.
@@ -304,20 +175,20 @@ PlyProperty ParseProperty(std::istringstream& ls, const std::string& line, const
   if (type_name == "list") {
     std::string count_name, item_name;
     ls >> count_name >> item_name >> property.name;
-    if (!ls) Fail(src, where + "malformed list property '" + line + "'");
+    if (!ls) FailPly(src, where + "malformed list property '" + line + "'");
     if (!PlyTypeFromName(count_name, &property.count_type) ||
         !PlyTypeIsInteger(property.count_type)) {
-      Fail(src, where + "bad list count type '" + count_name + "'");
+      FailPly(src, where + "bad list count type '" + count_name + "'");
     }
     if (!PlyTypeFromName(item_name, &property.type)) {
-      Fail(src, where + "unknown property type '" + item_name + "'");
+      FailPly(src, where + "unknown property type '" + item_name + "'");
     }
     property.is_list = true;
   } else {
     ls >> property.name;
-    if (!ls) Fail(src, where + "malformed property line '" + line + "'");
+    if (!ls) FailPly(src, where + "malformed property line '" + line + "'");
     if (!PlyTypeFromName(type_name, &property.type)) {
-      Fail(src, where + "unknown property type '" + type_name + "'");
+      FailPly(src, where + "unknown property type '" + type_name + "'");
     }
   }
   return property;
@@ -330,7 +201,7 @@ class PlyReader {
 
   MeshData Read() {
     if (!NextLine() || Trim(line_) != "ply") {
-      Fail(src_, "not a PLY file (first line is not 'ply')");
+      FailPly(src_, "not a PLY file (first line is not 'ply')");
     }
     const PlyHeader header = ReadHeader();
     mesh_.origin = header.origin;
@@ -338,19 +209,19 @@ class PlyReader {
     binary_ = header.format != PlyFormat::kAscii;
     swap_ = header.format == PlyFormat::kBinaryBig;
     data_.assign(std::istreambuf_iterator<char>(in_), std::istreambuf_iterator<char>());
-    if (in_.bad()) Fail(src_, "read error after the header");
+    if (in_.bad()) FailPly(src_, "read error after the header");
     cursor_ = data_.data();
     end_ = data_.data() + data_.size();
     in_body_ = true;
     const unsigned long long needed = MinimumBodyBytes(header);
     if (needed > data_.size() + (binary_ ? 0 : 1)) {  // ascii: the last value needs no separator
-      Fail(src_, "header counts (" + CountsText(header) + ") need at least " +
+      FailPly(src_, "header counts (" + CountsText(header) + ") need at least " +
                      (needed == ULLONG_MAX ? std::string("2^64") : std::to_string(needed)) +
                      " bytes of data, but only " + std::to_string(data_.size()) +
                      " bytes follow the header (truncated file or wrong counts)");
     }
     for (const PlyElement& element : header.elements) ReadElement(element);
-    if (!have_xyz_) Fail(src_, "no vertex element");
+    if (!have_xyz_) FailPly(src_, "no vertex element");
     mesh_.Check(src_);
     return std::move(mesh_);
   }
@@ -402,17 +273,17 @@ class PlyReader {
         const auto same = [&name](const PlyElement& e) { return e.name == name; };
         if ((name == "vertex" || name == "face") &&
             std::count_if(header.elements.begin(), header.elements.end(), same) > 1) {
-          Fail(src_, where + "a second '" + name + "' element");
+          FailPly(src_, where + "a second '" + name + "' element");
         }
       } else if (keyword == "property") {
-        if (header.elements.empty()) Fail(src_, where + "property before any element");
+        if (header.elements.empty()) FailPly(src_, where + "property before any element");
         header.elements.back().properties.push_back(ParseProperty(ls, line_, src_, where));
       } else {
-        Fail(src_, where + "unknown header keyword '" + keyword + "'");
+        FailPly(src_, where + "unknown header keyword '" + keyword + "'");
       }
     }
-    if (!header_done) Fail(src_, "truncated header (no end_header)");
-    if (!have_format) Fail(src_, "header has no format line");
+    if (!header_done) FailPly(src_, "truncated header (no end_header)");
+    if (!have_format) FailPly(src_, "header has no format line");
     return header;
   }
 
@@ -421,7 +292,7 @@ class PlyReader {
     PlyElement element;
     long long count = -1;
     ls >> element.name >> count;
-    if (!ls || count < 0) Fail(src_, where + "malformed element line '" + line_ + "'");
+    if (!ls || count < 0) FailPly(src_, where + "malformed element line '" + line_ + "'");
     element.count = static_cast<size_t>(count);
     return element;
   }
@@ -459,13 +330,13 @@ class PlyReader {
 
   // The length of a list as read: a whole number the rest of the data can hold (in
   // binary, n items of `type`; in ascii, n values on the rest of the line).
-  size_t ListLength(double count, PlyType type, const std::optional<AsciiLine>& ascii,
+  size_t ListLength(double count, PlyType type, const std::optional<PlyAsciiLine>& ascii,
                     const std::string& context) const {
     const double fits = binary_ ? static_cast<double>(end_ - cursor_) / static_cast<double>(PlyTypeSize(type))
                                 : static_cast<double>(ascii->Left());
     if (!(count >= 0 && count == std::floor(count) && count <= fits)) {
-      Fail(src_, context + ": bad list length " + FormatNumber(count) + " (the data left holds " +
-                     FormatNumber(std::floor(fits)) + ")");
+      FailPly(src_, context + ": bad list length " + FormatPlyNumber(count) + " (the data left holds " +
+                     FormatPlyNumber(std::floor(fits)) + ")");
     }
     return static_cast<size_t>(count);
   }
@@ -474,11 +345,11 @@ class PlyReader {
   // face's vertex list into list_; other lists are skipped.
   void ReadInstance(const PlyElement& element, const ElementLayout& layout, size_t i,
                     const std::string& context) {
-    std::optional<AsciiLine> ascii;
+    std::optional<PlyAsciiLine> ascii;
     if (!binary_) {
       do {
         if (!NextLine()) {
-          Fail(src_, "truncated ascii data: expected " + std::to_string(element.count) + " " +
+          FailPly(src_, "truncated ascii data: expected " + std::to_string(element.count) + " " +
                          element.name + " lines, found " + std::to_string(i));
         }
       } while (Trim(line_).empty());
@@ -500,21 +371,21 @@ class PlyReader {
       }
     }
     if (ascii && !ascii->AtEnd()) {
-      Fail(src_, "line " + std::to_string(line_number_) + ": too many values for " + context);
+      FailPly(src_, "line " + std::to_string(line_number_) + ": too many values for " + context);
     }
   }
 
-  double ReadScalar(PlyType type, std::optional<AsciiLine>& ascii, const std::string& context) {
+  double ReadScalar(PlyType type, std::optional<PlyAsciiLine>& ascii, const std::string& context) {
     return binary_ ? ReadBinaryScalar(&cursor_, end_, type, swap_, src_, context)
                    : ascii->Next(context);
   }
 
-  void SkipList(PlyType type, size_t n, std::optional<AsciiLine>& ascii,
+  void SkipList(PlyType type, size_t n, std::optional<PlyAsciiLine>& ascii,
                 const std::string& context) {
     if (binary_) {
       const size_t bytes = n * PlyTypeSize(type);
       if (static_cast<size_t>(end_ - cursor_) < bytes) {
-        Fail(src_, "truncated binary data in " + context);
+        FailPly(src_, "truncated binary data in " + context);
       }
       cursor_ += bytes;
     } else {
@@ -544,7 +415,7 @@ class PlyReader {
         case VertexSlot::kViews: views = IntValue(v, context, "views"); break;
       }
     }
-    if (!xyz.allFinite()) Fail(src_, context + ": coordinate is not finite");
+    if (!xyz.allFinite()) FailPly(src_, context + ": coordinate is not finite");
     mesh_.vertices.push_back(xyz);
     if (layout.want_normals) mesh_.normals.push_back(nrm);
     // Colours stored as floats in 0..1 by some tools are scaled in one go once the whole
@@ -559,7 +430,7 @@ class PlyReader {
     if (list_.size() < 3) return;  // a point or a segment: no area, no triangle
     for (double index : list_) {
       if (!(index >= 0 && index < static_cast<double>(mesh_.vertices.size())) || !have_xyz_) {
-        Fail(src_, context + ": vertex index " + FormatNumber(index) + " out of range (" +
+        FailPly(src_, context + ": vertex index " + FormatPlyNumber(index) + " out of range (" +
                        std::to_string(mesh_.vertices.size()) + " vertices)");
       }
     }
@@ -592,7 +463,7 @@ class PlyReader {
   // An integer property (views, label) as int; values outside int's range are an error.
   int IntValue(double value, const std::string& context, const std::string& what) const {
     if (value >= INT32_MIN && value <= INT32_MAX) return static_cast<int>(value);
-    Fail(src_, context + ": " + what + " " + FormatNumber(value) + " is out of range");
+    FailPly(src_, context + ": " + what + " " + FormatPlyNumber(value) + " is out of range");
   }
 
   static constexpr size_t kAsciiReserve = size_t{1} << 16;
