@@ -79,7 +79,9 @@ std::string FormatPlyNumber(double value) {
 double ReadBinaryScalar(const char** cursor, const char* end, PlyType type, bool swap,
                         const std::string& source, const std::string& context) {
   const size_t size = PlyTypeSize(type);
-  if (static_cast<size_t>(end - *cursor) < size) FailPly(source, "truncated binary data in " + context);
+  if (static_cast<size_t>(end - *cursor) < size) {
+    FailPly(source, "truncated binary data in " + context);
+  }
   unsigned char bytes[8];
   std::memcpy(bytes, *cursor, size);
   *cursor += size;

@@ -31,7 +31,8 @@ def shifted(mask, dx, dy):
     fx, fy = dx - ix, dy - iy
     r = np.roll(np.roll(f, iy, 0), ix, 1)
     rx, ry = np.roll(r, 1, 1), np.roll(r, 1, 0)
-    g = (1 - fx) * (1 - fy) * r + fx * (1 - fy) * rx + (1 - fx) * fy * ry + fx * fy * np.roll(rx, 1, 0)
+    g = ((1 - fx) * (1 - fy) * r + fx * (1 - fy) * rx + (1 - fx) * fy * ry
+         + fx * fy * np.roll(rx, 1, 0))
     return g >= 0.5
 
 
@@ -47,7 +48,8 @@ def main():
         grey = read_pgm(path)
         mask = (grey == 170) | (grey == 255)
         outline = (mask ^ np.roll(mask, 1, 0)).sum() + (mask ^ np.roll(mask, 1, 1)).sum()
-        lows = [min(iou(mask, shifted(mask, dx, dy)) for dx, dy in ((s, 0), (0, s), (s / 2 ** .5, s / 2 ** .5)))
+        directions = lambda s: ((s, 0), (0, s), (s / 2 ** .5, s / 2 ** .5))
+        lows = [min(iou(mask, shifted(mask, dx, dy)) for dx, dy in directions(s))
                 for s in (0.5, 1.0, 1.5)]
         print(path, mask.sum(), outline, ' '.join(f'{v:.3f}' for v in lows))
 
